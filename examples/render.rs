@@ -1,0 +1,112 @@
+//! The headless renderer: a glTF in, the caustic irradiance (EXR, lux), the final frame (PNG)
+//! and statistics (JSON) out.
+//!
+//! ```text
+//! cargo run --release --example render -- SCENE.gltf --technique reference --width 256 \
+//!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
+//!     [--photons N] [--frames N] [--seed N] [--compare REF.exr]
+//! ```
+//!
+//! Errors (missing file, no camera, no lights, no adapter, bad option) print one line and
+//! exit with status 2; no output file is written unless the whole render succeeded.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use bevy_caustics::CausticsTechnique;
+use bevy_caustics::headless::{RenderJob, find_adapter, run};
+use bevy_caustics::reference::{CausticImage, compare};
+
+struct Outputs {
+    exr: Option<PathBuf>,
+    png: Option<PathBuf>,
+    json: Option<PathBuf>,
+    compare: Option<PathBuf>,
+}
+
+fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
+    let mut job = RenderJob { progress: true, ..Default::default() };
+    let mut out = Outputs { exr: None, png: None, json: None, compare: None };
+    let mut scene = None;
+    let mut i = 0;
+    let num = |v: Option<&String>, name: &str| -> Result<u64, String> {
+        let v = v.ok_or_else(|| format!("{name} needs a value"))?;
+        v.parse::<u64>().map_err(|_| format!("{name} expects a non-negative integer, got '{v}'"))
+    };
+    while i < args.len() {
+        let a = args[i].as_str();
+        let v = args.get(i + 1);
+        let path = |v: Option<&String>| v.map(PathBuf::from).ok_or_else(|| format!("{a} needs a path"));
+        match a {
+            "--technique" => {
+                let t = v.ok_or("--technique needs a value")?;
+                job.technique = CausticsTechnique::from_name(t)
+                    .ok_or_else(|| format!("unknown technique '{t}' (available: reference)"))?;
+            }
+            "--width" => job.width = num(v, a)? as u32,
+            "--height" => job.height = num(v, a)? as u32,
+            "--photons" => job.photons = Some(num(v, a)?),
+            "--frames" => job.frames = num(v, a)?.clamp(1, 100_000) as u32,
+            "--seed" => job.seed = num(v, a)?,
+            "--out-exr" => out.exr = Some(path(v)?),
+            "--out-png" => out.png = Some(path(v)?),
+            "--json" => out.json = Some(path(v)?),
+            "--compare" => out.compare = Some(path(v)?),
+            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
+            s => {
+                if scene.replace(PathBuf::from(s)).is_some() {
+                    return Err("more than one scene given".into());
+                }
+                i += 1;
+                continue;
+            }
+        }
+        i += 2;
+    }
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--compare REF.exr]")?;
+    Ok((job, out))
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match real_main(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn real_main(args: &[String]) -> Result<(), String> {
+    let (job, out) = parse(args)?;
+    // Read the comparison image first: a bad --compare fails before any work.
+    let reference = out.compare.as_ref().map(CausticImage::read_exr).transpose()?;
+    if !job.scene.is_file() {
+        return Err(format!("scene file not found: {}", job.scene.display()));
+    }
+    find_adapter()?;
+    let (w, h) = (job.width, job.height);
+    let mut report = run(job)?;
+    let caustics = report.caustics.take().unwrap_or_else(|| CausticImage::new(w, h));
+    if let Some(r) = &reference {
+        // Over every pixel: where the camera sees no diffuse surface both buffers are zero.
+        report.metrics = Some(compare(&caustics, r, None).ok_or_else(|| {
+            format!("--compare image is {}x{}, the render is {w}x{h}", r.width, r.height)
+        })?);
+    }
+    if let Some(p) = &out.exr {
+        caustics.write_exr(p)?;
+    }
+    if let Some(p) = &out.png {
+        image::save_buffer(p, &report.frame_rgba8, w, h, image::ColorType::Rgba8)
+            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    if let Some(p) = &out.json {
+        std::fs::write(p, &json).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    } else {
+        println!("{json}");
+    }
+    Ok(())
+}

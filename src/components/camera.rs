@@ -1,0 +1,106 @@
+use bevy::camera::Hdr;
+use bevy::core_pipeline::prepass::{DeferredPrepass, DepthPrepass};
+use bevy::prelude::*;
+
+/// Caustics for this camera: put it on a `Camera3d`.
+///
+/// It requires [`Hdr`] (the composite adds linear irradiance into the HDR target before
+/// tone mapping) and the deferred prepasses (the composite reads the diffuse albedo from the
+/// G-buffer). Make your opaque materials deferred, e.g.
+/// `app.insert_resource(DefaultOpaqueRendererMethod::deferred())`.
+///
+/// # Usage Notes
+/// Views without this component, and shadow views, run no caustics pass at all. A camera
+/// with it but a scene without a [`crate::CausticLight`] or without a caster dispatches
+/// nothing either.
+#[derive(Component, Reflect, Clone, Debug, PartialEq)]
+#[reflect(Component, Default, Clone)]
+#[require(Hdr, DepthPrepass, DeferredPrepass)]
+pub struct Caustics {
+    /// Which algorithm fills the caustics buffer. Default [`CausticsTechnique::Reference`]
+    /// (the only one available in this version).
+    pub technique: CausticsTechnique,
+    /// Quality preset: photons per light for the reference tracer. Default `Medium`.
+    pub quality: CausticsQuality,
+    /// What the composite shows. Default `Off` (normal shading).
+    pub debug_view: CausticsDebugView,
+    /// Seed of the random streams of stochastic techniques. Default 1. Any value.
+    pub seed: u64,
+}
+
+impl Default for Caustics {
+    fn default() -> Self {
+        Self {
+            technique: CausticsTechnique::Reference,
+            quality: CausticsQuality::Medium,
+            debug_view: CausticsDebugView::Off,
+            seed: 1,
+        }
+    }
+}
+
+/// The algorithm that computes caustic irradiance.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum CausticsTechnique {
+    /// The CPU ground-truth light tracer (multi-threaded, deterministic). Renders once per
+    /// scene change on a background task and uploads the image; seconds, not milliseconds.
+    #[default]
+    Reference,
+}
+
+impl CausticsTechnique {
+    /// Name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Reference => "reference",
+        }
+    }
+
+    /// Parse a command-line name.
+    pub fn from_name(s: &str) -> Option<Self> {
+        match s {
+            "reference" => Some(Self::Reference),
+            _ => None,
+        }
+    }
+}
+
+/// Quality presets. Cost grows linearly with the photon count.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum CausticsQuality {
+    /// 65 536 photons per light.
+    Low,
+    /// 262 144 photons per light.
+    #[default]
+    Medium,
+    /// 1 048 576 photons per light.
+    High,
+    /// An explicit photon count per light (0 traces nothing).
+    Custom {
+        /// Photons per light.
+        photons: u64,
+    },
+}
+
+impl CausticsQuality {
+    /// Photons per light for the reference tracer.
+    pub fn photons_per_light(self) -> u64 {
+        match self {
+            Self::Low => 1 << 16,
+            Self::Medium => 1 << 18,
+            Self::High => 1 << 20,
+            Self::Custom { photons } => photons,
+        }
+    }
+}
+
+/// Debug output of the composite.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum CausticsDebugView {
+    /// Normal shading: caustic light added as `albedo / π · E · exposure`.
+    #[default]
+    Off,
+    /// Adds the caustic irradiance as if every surface were white (albedo 1), to see the
+    /// caustics buffer itself.
+    WhiteAlbedo,
+}

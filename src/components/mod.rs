@@ -1,0 +1,15 @@
+//! The user-facing ECS surface: what a game puts on its camera, lights, meshes and volumes.
+//!
+//! Every type is `Reflect`; every field documents its unit, default, valid range and cost.
+//! Invalid values are clamped by [`validate`] with one `warn!` naming the entity and the field.
+
+mod camera;
+mod light;
+mod material;
+pub mod validate;
+mod volume;
+
+pub use camera::*;
+pub use light::*;
+pub use material::*;
+pub use volume::*;

@@ -1,0 +1,77 @@
+use bevy::prelude::*;
+
+/// A caustics volume: an oriented box (its `Transform` places, rotates and scales the unit box
+/// times [`CausticsVolume::size`]) inside which caustics are computed by slab propagation
+/// (seed 000). Declared and validated in this version; its passes come with the `Volume`
+/// technique.
+#[derive(Component, Reflect, Clone, Debug, PartialEq)]
+#[reflect(Component, Default, Clone)]
+#[require(Transform)]
+pub struct CausticsVolume {
+    /// Box size in local units before the Transform's scale. Default (1, 1, 1). Every
+    /// component must be > 0: zero, negative or non-finite components are clamped to 1e-3 with
+    /// a warning.
+    pub size: Vec3,
+    /// Slabs parallel to the entry face. Default 3. Range [1, 64]; 0 is clamped to 1 and
+    /// values above 64 to 64, with a warning. Cost: one propagation pass per slab.
+    pub slabs: u32,
+    /// Photon budget per update. Default 20 000. Range [0, 16 777 216]; negative values are
+    /// clamped to 0 (a volume that traces nothing) with a warning. Signed so that a negative
+    /// value from an editor or a script is reported instead of wrapping. Cost: linear.
+    pub photons: i32,
+    /// Face photons enter through. Default `PosY` (the top).
+    pub entry: VolumeFace,
+    /// Faces whose projectors splat photons onto receivers. Default the face opposite entry.
+    pub exit: Vec<VolumeFace>,
+    /// Faces that terminate photons. Default none.
+    pub culling: Vec<VolumeFace>,
+    /// Side of each projector's square G-buffer, pixels. Default 200. Range [16, 4096],
+    /// clamped with a warning. Cost: quadratic.
+    pub projector_resolution: u32,
+}
+
+impl Default for CausticsVolume {
+    fn default() -> Self {
+        Self {
+            size: Vec3::ONE,
+            slabs: 3,
+            photons: 20_000,
+            entry: VolumeFace::PosY,
+            exit: vec![VolumeFace::NegY],
+            culling: vec![],
+            projector_resolution: 200,
+        }
+    }
+}
+
+/// A face of a volume's box, by the local axis of its outward normal.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum VolumeFace {
+    /// +X.
+    PosX,
+    /// -X.
+    NegX,
+    /// +Y.
+    #[default]
+    PosY,
+    /// -Y.
+    NegY,
+    /// +Z.
+    PosZ,
+    /// -Z.
+    NegZ,
+}
+
+impl VolumeFace {
+    /// Outward unit normal in the volume's local space.
+    pub fn normal(self) -> Vec3 {
+        match self {
+            Self::PosX => Vec3::X,
+            Self::NegX => Vec3::NEG_X,
+            Self::PosY => Vec3::Y,
+            Self::NegY => Vec3::NEG_Y,
+            Self::PosZ => Vec3::Z,
+            Self::NegZ => Vec3::NEG_Z,
+        }
+    }
+}

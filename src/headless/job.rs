@@ -1,0 +1,491 @@
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use bevy::app::{AppExit, ScheduleRunnerPlugin};
+use bevy::asset::{AssetPlugin, LoadState, RenderAssetUsages};
+use bevy::camera::{Hdr, RenderTarget};
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore, FrameCount};
+use bevy::light::{DirectionalLight, PointLight, SpotLight};
+use bevy::pbr::DefaultOpaqueRendererMethod;
+use bevy::prelude::*;
+use bevy::render::diagnostic::RenderDiagnosticsPlugin;
+use bevy::render::gpu_readback::{Readback, ReadbackComplete};
+use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
+use bevy::render::renderer::RenderAdapterInfo;
+use bevy::render::{RenderApp, RenderPlugin, RenderStartup};
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+use serde::Serialize;
+
+use crate::reference::{CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceStatus};
+use crate::render::composite::COMPOSITE_PASS;
+use crate::{CausticLight, Caustics, CausticsDispatchLog, CausticsPlugin, CausticsQuality, CausticsTechnique};
+
+/// One render.
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    /// The glTF (`.gltf` or `.glb`) to render.
+    pub scene: PathBuf,
+    /// Technique.
+    pub technique: CausticsTechnique,
+    /// Target width, pixels.
+    pub width: u32,
+    /// Target height, pixels.
+    pub height: u32,
+    /// Photons per light (None: the `Medium` preset).
+    pub photons: Option<u64>,
+    /// Frames rendered and measured once the caustics are ready.
+    pub frames: u32,
+    /// Seed.
+    pub seed: u64,
+    /// Open a window instead of rendering offscreen (needs a display).
+    pub window: bool,
+    /// Render to a linear `Rgba16Float` target without tone mapping, and render a twin camera
+    /// without `Caustics`, so the composite can be checked exactly (tests).
+    pub linear: bool,
+    /// Print progress to stderr.
+    pub progress: bool,
+}
+
+impl Default for RenderJob {
+    fn default() -> Self {
+        Self {
+            scene: PathBuf::new(),
+            technique: CausticsTechnique::Reference,
+            width: 256,
+            height: 256,
+            photons: None,
+            frames: 8,
+            seed: 1,
+            window: false,
+            linear: false,
+            progress: false,
+        }
+    }
+}
+
+/// What a render produced.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RenderReport {
+    /// Adapter name (and backend).
+    pub adapter: String,
+    /// Technique name.
+    pub technique: String,
+    /// Width, height.
+    pub size: [u32; 2],
+    /// Median GPU milliseconds per caustics pass over the measured frames (CPU ms where the
+    /// adapter has no timestamp queries; see `timing`).
+    pub pass_ms: BTreeMap<String, f64>,
+    /// "gpu" or "cpu": which clock `pass_ms` comes from.
+    pub timing: String,
+    /// Photons traced (emitted) for the caustics buffer.
+    pub photons_traced: u64,
+    /// Photons that reached a visible pixel.
+    pub photons_in_view: u64,
+    /// Wall-clock seconds of the reference trace.
+    pub reference_seconds: f64,
+    /// Distinct caustics passes dispatched while measuring, in order of first dispatch.
+    pub passes: Vec<String>,
+    /// Invalid-input warnings logged.
+    pub warnings: Vec<String>,
+    /// Metrics against `--compare`, filled by the caller.
+    pub metrics: Option<ImageMetrics>,
+    /// Caustic irradiance (lux), zero where no caustic lands.
+    #[serde(skip)]
+    pub caustics: Option<CausticImage>,
+    /// The final frame, RGBA8 sRGB, tone mapped.
+    #[serde(skip)]
+    pub frame_rgba8: Vec<u8>,
+    /// With `linear`: the linear HDR frame with and without caustics, RGBA f32.
+    #[serde(skip)]
+    pub linear_with: Vec<[f32; 4]>,
+    /// See `linear_with`.
+    #[serde(skip)]
+    pub linear_without: Vec<[f32; 4]>,
+    /// With `linear`: the camera's exposure.
+    pub exposure: f32,
+}
+
+#[derive(Resource, Clone)]
+struct Job(RenderJob);
+
+#[derive(Resource, Clone, Default)]
+struct Shared(Arc<Mutex<Outcome>>);
+
+#[derive(Default)]
+struct Outcome {
+    error: Option<String>,
+    report: RenderReport,
+    twin_raw: Vec<u8>,
+    pass_samples: BTreeMap<String, Vec<f64>>,
+}
+
+#[derive(Resource, Default, PartialEq, Debug, Clone, Copy)]
+enum Phase {
+    #[default]
+    Loading,
+    Spawned(u32),
+    Tracing,
+    Measuring(u32),
+    Finishing(u32),
+}
+
+#[derive(Resource)]
+struct Handles {
+    scene: Handle<bevy::gltf::Gltf>,
+    target: Handle<Image>,
+    twin: Option<Handle<Image>>,
+}
+
+#[derive(Component)]
+struct MainCamera;
+
+#[derive(Component)]
+struct TwinCamera;
+
+/// Render `job`. Errors are one line, meant for the user.
+pub fn run(job: RenderJob) -> Result<RenderReport, String> {
+    if !job.scene.is_file() {
+        return Err(format!("scene file not found: {}", job.scene.display()));
+    }
+    let ext = job.scene.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if ext != "gltf" && ext != "glb" {
+        return Err(format!("not a glTF file (.gltf or .glb): {}", job.scene.display()));
+    }
+    if job.width == 0 || job.height == 0 || job.width > 8192 || job.height > 8192 {
+        return Err(format!("image size {}x{} is outside 1..=8192", job.width, job.height));
+    }
+    let dir = job.scene.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+    let dir = std::fs::canonicalize(&dir).map_err(|e| format!("cannot open {}: {e}", dir.display()))?;
+    let shared = Shared::default();
+    let mut app = App::new();
+    let asset = AssetPlugin { file_path: dir.to_string_lossy().into_owned(), ..default() };
+    let render = RenderPlugin { synchronous_pipeline_compilation: true, ..default() };
+    if job.window {
+        app.add_plugins(DefaultPlugins.set(asset).set(render));
+    } else {
+        app.add_plugins(
+            DefaultPlugins
+                .set(asset)
+                .set(render)
+                .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
+                .disable::<WinitPlugin>(),
+        )
+        .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(1.0 / 240.0)));
+    }
+    app.add_plugins((RenderDiagnosticsPlugin, CausticsPlugin))
+        .insert_resource(DefaultOpaqueRendererMethod::deferred())
+        .insert_resource(Job(job.clone()))
+        .insert_resource(shared.clone())
+        .init_resource::<Phase>()
+        .add_systems(Startup, start)
+        .add_systems(Update, (drive, mark_lights));
+    if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
+        let s = shared.clone();
+        render_app.add_systems(RenderStartup, move |info: Res<RenderAdapterInfo>| {
+            if let Ok(mut o) = s.0.lock() {
+                o.report.adapter = format!("{} ({:?})", info.name, info.backend);
+            }
+        });
+    }
+    app.run();
+    let mut o = shared.0.lock().map_err(|_| "internal error: poisoned state".to_string())?;
+    if let Some(e) = o.error.take() {
+        return Err(e);
+    }
+    let samples = std::mem::take(&mut o.pass_samples);
+    for (k, mut v) in samples {
+        v.sort_by(f64::total_cmp);
+        if !v.is_empty() {
+            o.report.pass_ms.insert(k, v[v.len() / 2]);
+        }
+    }
+    Ok(std::mem::take(&mut o.report))
+}
+
+fn start(mut commands: Commands, job: Res<Job>, assets: Res<AssetServer>, mut images: ResMut<Assets<Image>>) {
+    let name = job.0.scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let scene = assets.load(name.clone());
+    commands.spawn(WorldAssetRoot(assets.load(GltfAssetLabel::Scene(0).from_asset(name))));
+    let format = if job.0.linear { TextureFormat::Rgba16Float } else { TextureFormat::Rgba8UnormSrgb };
+    let mut target_image = |format| {
+        let mut image = Image::new_fill(
+            Extent3d { width: job.0.width, height: job.0.height, depth_or_array_layers: 1 },
+            TextureDimension::D2,
+            &[0u8; 8][..format_bytes(format)],
+            format,
+            RenderAssetUsages::default(),
+        );
+        image.texture_descriptor.usage =
+            TextureUsages::TEXTURE_BINDING | TextureUsages::COPY_DST | TextureUsages::COPY_SRC | TextureUsages::RENDER_ATTACHMENT;
+        images.add(image)
+    };
+    let target = target_image(format);
+    let twin = job.0.linear.then(|| target_image(format));
+    commands.insert_resource(Handles { scene, target, twin });
+}
+
+fn format_bytes(f: TextureFormat) -> usize {
+    if f == TextureFormat::Rgba16Float { 8 } else { 4 }
+}
+
+/// Every light of the loaded scene casts caustics.
+fn mark_lights(
+    mut commands: Commands,
+    lights: Query<Entity, (Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>, Without<CausticLight>)>,
+) {
+    for e in &lights {
+        commands.entity(e).insert(CausticLight::default());
+    }
+}
+
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn drive(
+    mut commands: Commands,
+    job: Res<Job>,
+    shared: Res<Shared>,
+    mut phase: ResMut<Phase>,
+    handles: Res<Handles>,
+    assets: Res<AssetServer>,
+    mut cameras: Query<(Entity, &mut Camera, &GlobalTransform, &Projection), (Without<MainCamera>, Without<TwinCamera>)>,
+    lights: Query<(), Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>>,
+    main: Query<(Option<&ReferenceStatus>, Option<&CausticsReferenceImage>), With<MainCamera>>,
+    diagnostics: Res<DiagnosticsStore>,
+    log: Res<CausticsDispatchLog>,
+    warnings: Res<crate::CausticsWarnings>,
+    frames: Res<FrameCount>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    let fail = |msg: String, exit: &mut MessageWriter<AppExit>| {
+        if let Ok(mut o) = shared.0.lock() {
+            o.error.get_or_insert(msg);
+        }
+        exit.write(AppExit::error());
+    };
+    match *phase {
+        Phase::Loading => {
+            match assets.load_state(&handles.scene) {
+                LoadState::Failed(e) => return fail(format!("cannot load {}: {e}", job.0.scene.display()), &mut exit),
+                LoadState::Loaded => *phase = Phase::Spawned(0),
+                _ => {}
+            }
+            if frames.0 > 3000 {
+                fail(format!("timed out loading {}", job.0.scene.display()), &mut exit);
+            }
+        }
+        Phase::Spawned(n) => {
+            // Give the scene a few frames to spawn.
+            if n < 3 {
+                *phase = Phase::Spawned(n + 1);
+                return;
+            }
+            let Some((cam_entity, mut cam, gt, projection)) = cameras.iter_mut().next() else {
+                return fail(format!("{} has no camera", job.0.scene.display()), &mut exit);
+            };
+            if lights.is_empty() {
+                return fail(format!("{} has no lights (KHR_lights_punctual)", job.0.scene.display()), &mut exit);
+            }
+            cam.is_active = false;
+            let _ = cam_entity;
+            let mut projection = projection.clone();
+            if let Projection::Perspective(p) = &mut projection {
+                p.aspect_ratio = job.0.width as f32 / job.0.height as f32;
+            }
+            let caustics = Caustics {
+                technique: job.0.technique,
+                quality: job.0.photons.map_or(CausticsQuality::Medium, |photons| CausticsQuality::Custom { photons }),
+                seed: job.0.seed,
+                ..default()
+            };
+            let tonemapping = if job.0.linear { Tonemapping::None } else { Tonemapping::default() };
+            let transform = gt.compute_transform();
+            let mut main = commands.spawn((
+                MainCamera,
+                Camera3d::default(),
+                Camera { order: 1, ..default() },
+                Hdr,
+                Msaa::Off,
+                projection.clone(),
+                transform,
+                tonemapping,
+                caustics,
+            ));
+            if !job.0.window {
+                main.insert(RenderTarget::Image(handles.target.clone().into()));
+            }
+            if let Some(twin) = &handles.twin {
+                commands.spawn((
+                    TwinCamera,
+                    Camera3d::default(),
+                    Camera { order: 2, ..default() },
+                    RenderTarget::Image(twin.clone().into()),
+                    Hdr,
+                    Msaa::Off,
+                    bevy::core_pipeline::prepass::DeferredPrepass,
+                    bevy::core_pipeline::prepass::DepthPrepass,
+                    projection,
+                    transform,
+                    tonemapping,
+                ));
+            }
+            *phase = Phase::Tracing;
+        }
+        Phase::Tracing => {
+            let Ok((status, _)) = main.single() else { return };
+            match status {
+                Some(ReferenceStatus::Ready) | Some(ReferenceStatus::Inactive) => {
+                    log.take();
+                    *phase = Phase::Measuring(0);
+                }
+                _ => {
+                    if job.0.progress && frames.0 % 120 == 0 {
+                        eprintln!("bevy_caustics: tracing reference photons...");
+                    }
+                }
+            }
+        }
+        Phase::Measuring(n) => {
+            let mut o = shared.0.lock().expect("state");
+            // Diagnostics arrive a few frames late: sample after a warm-up.
+            if n >= 3 {
+                for pass in [COMPOSITE_PASS] {
+                    for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
+                        let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
+                        if let Some(v) = diagnostics.get(&path).and_then(|d| d.value()) {
+                            o.pass_samples.entry(format!("{pass}@{clock}")).or_default().push(v);
+                        }
+                    }
+                }
+            }
+            for p in log.take() {
+                if !o.report.passes.iter().any(|q| q == p) {
+                    o.report.passes.push(p.to_string());
+                }
+            }
+            if n + 1 >= job.0.frames.max(4) && !job.0.window {
+                commands.spawn(Readback::texture(handles.target.clone())).observe(
+                    |ev: On<ReadbackComplete>, shared: Res<Shared>| {
+                        if let Ok(mut o) = shared.0.lock() {
+                            o.report.frame_rgba8 = ev.data.clone();
+                        }
+                    },
+                );
+                if let Some(twin) = &handles.twin {
+                    commands.spawn(Readback::texture(twin.clone())).observe(
+                        |ev: On<ReadbackComplete>, shared: Res<Shared>| {
+                            if let Ok(mut o) = shared.0.lock() {
+                                o.twin_raw = ev.data.clone();
+                            }
+                        },
+                    );
+                }
+                *phase = Phase::Finishing(0);
+            } else {
+                *phase = Phase::Measuring(n + 1);
+            }
+        }
+        Phase::Finishing(n) => {
+            if n < 4 {
+                *phase = Phase::Finishing(n + 1);
+                return;
+            }
+            let mut o = shared.0.lock().expect("state");
+            let (w, h) = (job.0.width, job.0.height);
+            o.report.technique = job.0.technique.name().to_string();
+            o.report.size = [w, h];
+            o.report.warnings = warnings.messages.clone();
+            // Prefer GPU timestamps; fall back to CPU spans where the adapter has none.
+            let gpu: Vec<_> = o.pass_samples.keys().filter(|k| k.ends_with("@gpu")).cloned().collect();
+            let clock = if gpu.is_empty() { "cpu" } else { "gpu" };
+            o.report.timing = clock.to_string();
+            o.pass_samples = std::mem::take(&mut o.pass_samples)
+                .into_iter()
+                .filter_map(|(k, v)| k.strip_suffix(&format!("@{clock}")).map(|p| (p.to_string(), v)))
+                .collect();
+            if let Ok((_, image)) = main.single() {
+                if let Some(img) = image {
+                    o.report.caustics = Some((*img.image).clone());
+                    o.report.photons_traced = img.stats.photons_emitted;
+                    o.report.photons_in_view = img.stats.photons_in_view;
+                    o.report.reference_seconds = img.seconds;
+                } else {
+                    o.report.caustics = Some(CausticImage::new(w, h));
+                }
+            }
+            let bytes = format_bytes(if job.0.linear { TextureFormat::Rgba16Float } else { TextureFormat::Rgba8UnormSrgb });
+            let data = unpad_rows(&o.report.frame_rgba8, w, h, bytes);
+            if job.0.linear {
+                o.report.linear_with = decode_f16_rgba(&data);
+                o.report.linear_without = decode_f16_rgba(&unpad_rows(&o.twin_raw, w, h, 8));
+                o.report.frame_rgba8 = o.report.linear_with.iter().flat_map(|p| tonemap_preview(*p)).collect();
+            } else {
+                o.report.frame_rgba8 = data;
+            }
+            o.report.exposure = bevy::camera::Exposure::default().exposure();
+            if o.report.frame_rgba8.len() != (w * h * 4) as usize {
+                o.error.get_or_insert("the frame readback did not arrive".to_string());
+            }
+            exit.write(AppExit::Success);
+        }
+    }
+}
+
+/// Strip the 256-byte row padding of a texture readback, if present.
+fn unpad_rows(data: &[u8], w: u32, h: u32, bpp: usize) -> Vec<u8> {
+    let row = w as usize * bpp;
+    let padded = row.div_ceil(256) * 256;
+    if data.len() == padded * h as usize && padded != row {
+        data.chunks(padded).flat_map(|r| r[..row].iter().copied()).collect()
+    } else {
+        data.to_vec()
+    }
+}
+
+fn f16_to_f32(b: u16) -> f32 {
+    let s = if b & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let e = ((b >> 10) & 0x1f) as i32;
+    let m = (b & 0x3ff) as f32;
+    match e {
+        0 => s * m * 2f32.powi(-24),
+        31 => if m == 0.0 { s * f32::INFINITY } else { f32::NAN },
+        _ => s * (1.0 + m / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
+/// Decode RGBA16F bytes.
+pub fn decode_f16_rgba(data: &[u8]) -> Vec<[f32; 4]> {
+    data.chunks_exact(8)
+        .map(|c| {
+            let v = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
+            [v(0), v(2), v(4), v(6)]
+        })
+        .collect()
+}
+
+/// A preview tone map for linear frames: Reinhard, then sRGB.
+fn tonemap_preview(p: [f32; 4]) -> [u8; 4] {
+    let t = |c: f32| {
+        let c = if c.is_finite() { c.max(0.0) } else { 0.0 };
+        (crate::reference::metrics::srgb_encode(c / (1.0 + c)) * 255.0 + 0.5) as u8
+    };
+    [t(p[0]), t(p[1]), t(p[2]), 255]
+}
+
+/// The first adapter wgpu finds on the backends Bevy would use, as "name (backend)", or an
+/// error line if there is none (e.g. no Vulkan driver: install `mesa-vulkan-drivers`).
+pub fn find_adapter() -> Result<String, String> {
+    let instance = wgpu::Instance::default();
+    let adapters = bevy::tasks::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    adapters
+        .first()
+        .map(|a| {
+            let i = a.get_info();
+            format!("{} ({:?})", i.name, i.backend)
+        })
+        .ok_or_else(|| {
+            "no GPU adapter found (no Vulkan driver? on Debian/Ubuntu install mesa-vulkan-drivers)".to_string()
+        })
+}

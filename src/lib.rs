@@ -1,0 +1,129 @@
+//! # bevy_caustics
+//!
+//! Physically calibrated real-time caustics for Bevy 0.19: light focused by glass, water and
+//! mirrors onto diffuse surfaces, in the light's own units (lux for Bevy lights).
+//!
+//! ```ignore
+//! app.add_plugins((DefaultPlugins, CausticsPlugin::default()));
+//! commands.spawn((Camera3d::default(), Caustics::default()));
+//! commands.spawn((DirectionalLight::default(), CausticLight::default()));
+//! // glTF glass (KHR_materials_transmission) and mirrors (metallic, smooth) cast caustics as
+//! // they are; `CausticMaterial` overrides the guess.
+//! ```
+//!
+//! A frame: the main world validates the components, gathers casters and receivers into a
+//! CPU BVH (on change only) and runs the camera's technique; the render world keeps a
+//! per-view caustics buffer of irradiance and the composite pass adds
+//! `albedo / π · E · exposure` into the deferred-lit HDR image. A scene without a
+//! [`CausticLight`] or without a caster dispatches nothing.
+//!
+//! The optics core ([`optics`]) holds every formula once, in plain Rust on glam.
+
+pub mod components;
+pub mod headless;
+pub mod optics;
+pub mod reference;
+pub mod render;
+pub mod scene;
+pub mod scenes;
+
+use bevy::prelude::*;
+use bevy::render::RenderApp;
+use bevy::render::renderer::{RenderAdapter, RenderDevice};
+use bevy::render::render_resource::{DownlevelFlags, WgpuLimits as Limits};
+
+pub use components::validate::CausticsWarnings;
+pub use components::{
+    CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality, CausticsTechnique,
+    CausticsVolume, VolumeFace,
+};
+pub use render::CausticsDispatchLog;
+
+/// Everything a user needs.
+pub mod prelude {
+    pub use crate::{
+        CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin, CausticsQuality,
+        CausticsTechnique, CausticsVolume, VolumeFace,
+    };
+}
+
+/// The plugin's main-world system sets, chained in `PostUpdate` after transform propagation.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum CausticsSystems {
+    /// Clamp invalid component values (with a warning).
+    Validate,
+    /// Gather casters, receivers and lights; rebuild BVHs on change.
+    Gather,
+    /// Run the cameras' techniques' main-world parts.
+    Technique,
+}
+
+/// Adds caustics to cameras with [`Caustics`].
+#[derive(Default)]
+pub struct CausticsPlugin;
+
+/// Whether the GPU supports the plugin; set in `Plugin::finish`.
+#[derive(Resource, Clone, Debug, PartialEq, Eq)]
+pub enum CausticsSupport {
+    /// Everything needed is there.
+    Supported,
+    /// Disabled; the missing features and limits.
+    Unsupported(Vec<String>),
+}
+
+/// What the plugin needs of the GPU, as a list of what is missing.
+pub fn missing_gpu_capabilities(flags: DownlevelFlags, limits: &Limits) -> Vec<String> {
+    let mut missing = Vec::new();
+    if !flags.contains(DownlevelFlags::COMPUTE_SHADERS) {
+        missing.push("DownlevelFlags::COMPUTE_SHADERS".to_string());
+    }
+    if limits.max_storage_buffers_per_shader_stage < 8 {
+        missing.push(format!("max_storage_buffers_per_shader_stage >= 8 (have {})", limits.max_storage_buffers_per_shader_stage));
+    }
+    if limits.max_storage_textures_per_shader_stage < 1 {
+        missing.push("max_storage_textures_per_shader_stage >= 1 (have 0)".to_string());
+    }
+    missing
+}
+
+impl Plugin for CausticsPlugin {
+    fn build(&self, app: &mut App) {
+        app.register_type::<Caustics>()
+            .register_type::<CausticLight>()
+            .register_type::<CausticMaterial>()
+            .register_type::<CausticsVolume>()
+            .configure_sets(
+                PostUpdate,
+                (CausticsSystems::Validate, CausticsSystems::Gather, CausticsSystems::Technique)
+                    .chain()
+                    .after(bevy::transform::TransformSystems::Propagate),
+            )
+            .init_resource::<render::CausticsDispatchLog>();
+        components::validate::plugin(app);
+        app.add_plugins(scene::ScenePlugin);
+    }
+
+    fn finish(&self, app: &mut App) {
+        let missing = match app.get_sub_app(RenderApp) {
+            Some(render_app) => {
+                let world = render_app.world();
+                match (world.get_resource::<RenderAdapter>(), world.get_resource::<RenderDevice>()) {
+                    (Some(adapter), Some(device)) => {
+                        missing_gpu_capabilities(adapter.get_downlevel_capabilities().flags, &device.limits())
+                    }
+                    _ => vec!["a render device (the RenderPlugin is not initialised)".to_string()],
+                }
+            }
+            None => vec!["the RenderApp (add DefaultPlugins or RenderPlugin)".to_string()],
+        };
+        if !missing.is_empty() {
+            warn!("bevy_caustics disabled: the GPU lacks {}", missing.join(", "));
+            app.insert_resource(CausticsSupport::Unsupported(missing));
+            return;
+        }
+        app.insert_resource(CausticsSupport::Supported);
+        reference::technique::plugin(app);
+        let log = app.world().resource::<render::CausticsDispatchLog>().clone();
+        render::build(app, log);
+    }
+}

@@ -1,0 +1,115 @@
+//! Image metrics between two caustic buffers: RMSE, mean FLIP, relative energy error.
+//!
+//! All three are computed over the *receiver pixels*: a mask of the pixels where the camera
+//! sees a diffuse surface (or, without a mask, every pixel).
+
+use glam::Vec3;
+
+use super::image::CausticImage;
+use crate::optics::luminance;
+
+/// The metrics the report and the CLI print.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ImageMetrics {
+    /// Root mean square error of the luminance of irradiance, lux.
+    pub rmse: f64,
+    /// RMSE divided by the mean reference luminance (dimensionless).
+    pub relative_rmse: f64,
+    /// Mean LDR-FLIP error in [0, 1] (see [`flip_mean`] for the tone mapping).
+    pub flip: f64,
+    /// `(sum test - sum ref) / sum ref` of luminance: the relative total-energy error.
+    pub energy_error: f64,
+    /// Pixels compared.
+    pub pixels: u64,
+}
+
+fn in_mask(mask: Option<&[bool]>, i: usize) -> bool {
+    mask.is_none_or(|m| m.get(i).copied().unwrap_or(false))
+}
+
+/// Compare `test` against `reference` over `mask` (true = receiver pixel).
+///
+/// Returns `None` if the sizes differ.
+pub fn compare(test: &CausticImage, reference: &CausticImage, mask: Option<&[bool]>) -> Option<ImageMetrics> {
+    if test.width != reference.width || test.height != reference.height {
+        return None;
+    }
+    let mut se = 0.0f64;
+    let (mut st, mut sr) = (0.0f64, 0.0f64);
+    let mut n = 0u64;
+    for (i, (t, r)) in test.data.iter().zip(&reference.data).enumerate() {
+        if !in_mask(mask, i) {
+            continue;
+        }
+        let lt = finite_lum(*t);
+        let lr = finite_lum(*r);
+        se += (lt - lr) * (lt - lr);
+        st += lt;
+        sr += lr;
+        n += 1;
+    }
+    let rmse = if n > 0 { (se / n as f64).sqrt() } else { 0.0 };
+    let mean_ref = if n > 0 { sr / n as f64 } else { 0.0 };
+    Some(ImageMetrics {
+        rmse,
+        relative_rmse: if mean_ref > 0.0 { rmse / mean_ref } else { 0.0 },
+        flip: flip_mean(test, reference, mask),
+        energy_error: if sr > 0.0 { (st - sr) / sr } else if st > 0.0 { 1.0 } else { 0.0 },
+        pixels: n,
+    })
+}
+
+fn finite_lum(v: Vec3) -> f64 {
+    let l = luminance(v) as f64;
+    if l.is_finite() { l } else { 0.0 }
+}
+
+/// Mean FLIP (Andersson et al. 2020, the `nv-flip` crate) between two irradiance buffers.
+///
+/// FLIP compares displayable images, so both are mapped the same way first: divided by the
+/// reference's 99th-percentile luminance over the mask (so the brightest 1 % of the
+/// reference saturates), clamped to [0, 1] and sRGB-encoded. Pixels outside the mask are set
+/// to black in both. The mean is over the masked pixels, at the default 67 pixels per degree.
+pub fn flip_mean(test: &CausticImage, reference: &CausticImage, mask: Option<&[bool]>) -> f64 {
+    let mut lums: Vec<f32> = reference
+        .data
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| in_mask(mask, *i))
+        .map(|(_, v)| finite_lum(*v) as f32)
+        .collect();
+    if lums.is_empty() {
+        return 0.0;
+    }
+    lums.sort_by(f32::total_cmp);
+    let p99 = lums[((lums.len() - 1) as f32 * 0.99) as usize];
+    let scale = if p99 > 0.0 { 1.0 / p99 } else { 1.0 };
+    let encode = |img: &CausticImage| -> Vec<u8> {
+        let mut out = Vec::with_capacity(img.data.len() * 3);
+        for (i, v) in img.data.iter().enumerate() {
+            let v = if in_mask(mask, i) && v.is_finite() { *v * scale } else { Vec3::ZERO };
+            for c in v.to_array() {
+                out.push((srgb_encode(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8);
+            }
+        }
+        out
+    };
+    let (w, h) = (reference.width, reference.height);
+    let r = nv_flip::FlipImageRgb8::with_data(w, h, &encode(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(w, h, &encode(test));
+    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
+    let mut s = 0.0f64;
+    let mut n = 0u64;
+    for (i, e) in err.iter().enumerate() {
+        if in_mask(mask, i) {
+            s += *e as f64;
+            n += 1;
+        }
+    }
+    if n > 0 { s / n as f64 } else { 0.0 }
+}
+
+/// The sRGB transfer function.
+pub fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+}

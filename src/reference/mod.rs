@@ -1,0 +1,12 @@
+//! The CPU ground truth: a deterministic multi-threaded light tracer, the caustic image type
+//! and the metrics every technique is judged by.
+
+pub mod image;
+pub mod metrics;
+pub mod technique;
+pub mod tracer;
+
+pub use image::CausticImage;
+pub use metrics::{ImageMetrics, compare};
+pub use tracer::{TraceOutput, TraceSettings, TraceStats, trace};
+pub use technique::{CausticsReferenceImage, ReferenceStatus};

@@ -1,0 +1,164 @@
+//! Render-world plumbing: the per-view caustics buffer, the extraction of the camera settings
+//! and of the technique's result, and the log of dispatched passes.
+//!
+//! The caustics buffer is a per-view `Rgba32Float` texture of caustic irradiance (lux, linear,
+//! RGB; alpha unused). 32-bit floats, because focused sunlight exceeds f16's 65 504 lux.
+//! Every technique writes it, the composite reads it.
+
+pub mod composite;
+
+use std::sync::{Arc, Mutex};
+
+use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
+use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
+use bevy::render::render_resource::{
+    Extent3d, Origin3d, TexelCopyBufferLayout, TexelCopyTextureInfo, Texture, TextureAspect,
+    TextureDescriptor, TextureDimension, TextureFormat, TextureUsages, TextureView,
+    TextureViewDescriptor,
+};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::sync_component::SyncComponent;
+use bevy::render::{Render, RenderApp, RenderSystems};
+
+use crate::components::{Caustics, CausticsDebugView};
+use crate::reference::{CausticImage, CausticsReferenceImage};
+
+/// Format of the caustics buffer.
+pub const CAUSTICS_BUFFER_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
+
+/// The names of the caustics passes dispatched, shared by the main and render worlds. Each
+/// pass adds its name when it records GPU work; tools drain it (see
+/// [`CausticsDispatchLog::take`]). Empty for a scene that needs no pass.
+#[derive(Resource, Clone, Default, Debug)]
+pub struct CausticsDispatchLog(Arc<Mutex<Vec<&'static str>>>);
+
+impl CausticsDispatchLog {
+    /// Record that `pass` was dispatched.
+    pub fn record(&self, pass: &'static str) {
+        if let Ok(mut v) = self.0.lock() {
+            v.push(pass);
+        }
+    }
+
+    /// Everything recorded since the last call.
+    pub fn take(&self) -> Vec<&'static str> {
+        self.0.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default()
+    }
+}
+
+/// The render-world copy of a camera's [`Caustics`] and of its technique's CPU result.
+#[derive(Component, Clone, Debug)]
+pub struct ExtractedCaustics {
+    /// Composite as if albedo were 1.
+    pub white_albedo: bool,
+    /// The reference image to upload, with its serial.
+    pub reference: Option<(Arc<CausticImage>, u64)>,
+}
+
+impl SyncComponent for Caustics {
+    type Target = (ExtractedCaustics, ViewCausticsBuffer);
+}
+
+impl ExtractComponent for Caustics {
+    type QueryData = (&'static Caustics, Option<&'static CausticsReferenceImage>);
+    type QueryFilter = ();
+    type Out = ExtractedCaustics;
+
+    fn extract_component((c, reference): (&Caustics, Option<&CausticsReferenceImage>)) -> Option<Self::Out> {
+        // Nothing to composite: the view carries no caustics components, and no pass runs.
+        let reference = reference.map(|r| (r.image.clone(), r.serial))?;
+        Some(ExtractedCaustics {
+            white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
+            reference: Some(reference),
+        })
+    }
+}
+
+/// A view's caustics buffer.
+#[derive(Component)]
+pub struct ViewCausticsBuffer {
+    /// The texture (`TEXTURE_BINDING | STORAGE_BINDING | COPY_DST | COPY_SRC`).
+    pub texture: Texture,
+    /// Its default view.
+    pub view: TextureView,
+    /// Size in pixels.
+    pub size: UVec2,
+    /// Serial of the reference image in it (0: none).
+    pub uploaded: u64,
+}
+
+/// Create (or resize) each caustics view's buffer and upload a new reference image.
+fn prepare_caustics_buffers(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    mut views: Query<(Entity, &ExtractedCaustics, &ExtractedCamera, Option<&mut ViewCausticsBuffer>)>,
+) {
+    for (entity, caustics, camera, buffer) in &mut views {
+        let Some(size) = camera.physical_viewport_size else { continue };
+        if size.x == 0 || size.y == 0 {
+            continue;
+        }
+        let mut new_buffer = None;
+        let buffer = match buffer {
+            Some(b) if b.size == size => b.into_inner(),
+            _ => {
+                let texture = device.create_texture(&TextureDescriptor {
+                    label: Some("caustics_buffer"),
+                    size: Extent3d { width: size.x, height: size.y, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: TextureDimension::D2,
+                    format: CAUSTICS_BUFFER_FORMAT,
+                    usage: TextureUsages::TEXTURE_BINDING
+                        | TextureUsages::STORAGE_BINDING
+                        | TextureUsages::COPY_DST
+                        | TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                });
+                let view = texture.create_view(&TextureViewDescriptor::default());
+                new_buffer = Some(ViewCausticsBuffer { texture, view, size, uploaded: 0 });
+                new_buffer.as_mut().unwrap()
+            }
+        };
+        if let Some((image, serial)) = &caustics.reference
+            && *serial != buffer.uploaded
+            && image.width == size.x
+            && image.height == size.y
+        {
+            upload(&queue, &buffer.texture, image);
+            buffer.uploaded = *serial;
+        }
+        if let Some(b) = new_buffer.take() {
+            commands.entity(entity).insert(b);
+        }
+    }
+}
+
+/// Copy a CPU image into a caustics buffer (non-finite values become 0).
+pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
+    let mut bytes = Vec::with_capacity(image.data.len() * 16);
+    for v in &image.data {
+        let v = crate::optics::finite_or_zero(*v);
+        for c in [v.x, v.y, v.z, 0.0f32] {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    queue.write_texture(
+        TexelCopyTextureInfo { texture, mip_level: 0, origin: Origin3d::ZERO, aspect: TextureAspect::All },
+        &bytes,
+        TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(image.width * 16), rows_per_image: Some(image.height) },
+        Extent3d { width: image.width, height: image.height, depth_or_array_layers: 1 },
+    );
+}
+
+/// Render-app part of the plugin: extraction, buffers, composite.
+pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
+    app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
+    composite::build(app);
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
+    render_app
+        .insert_resource(log)
+        .add_systems(Render, prepare_caustics_buffers.in_set(RenderSystems::PrepareResources));
+}

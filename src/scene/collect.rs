@@ -1,0 +1,265 @@
+//! Gathers casters, receivers and caustic lights from the ECS into a [`CausticsScene`].
+//!
+//! Runs in `PostUpdate` after transform propagation. Work is done only on change: a BLAS is
+//! built once per mesh asset (and again only when that asset is modified), the TLAS is rebuilt
+//! when an instance, material or light changed. With no [`CausticLight`] in the world nothing
+//! is gathered at all.
+
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+
+use bevy::asset::AssetEvent;
+use bevy::light::{DirectionalLight, PointLight, SpotLight};
+use bevy::mesh::{Indices, Mesh, Mesh3d, PrimitiveTopology, VertexAttributeValues};
+use bevy::pbr::{MeshMaterial3d, StandardMaterial};
+use bevy::prelude::*;
+use glam::Vec3 as GVec3;
+
+use super::{Blas, Instance, MaterialParams, MeshGeometry, Surface, Tlas, TraceLight, classify_material};
+use crate::components::validate::CausticsWarnings;
+use crate::components::{CausticLight, CausticMaterial};
+
+/// The gathered scene, rebuilt on change. Shared with the techniques through `Arc`s.
+#[derive(Resource, Default, Clone)]
+pub struct CausticsScene {
+    /// Instances and TLAS.
+    pub tlas: Arc<Tlas>,
+    /// Caustic lights with their entity.
+    pub lights: Vec<(Entity, TraceLight)>,
+    /// Incremented each time the scene changes.
+    pub generation: u64,
+    /// Number of specular instances (casters).
+    pub casters: usize,
+    /// Number of diffuse instances (receivers).
+    pub receivers: usize,
+    /// BLAS builds since startup (the cache makes this count mesh assets, not frames).
+    pub blas_builds: u64,
+    /// Triangles skipped as degenerate, over all BLAS built.
+    pub degenerate_triangles: u64,
+}
+
+impl CausticsScene {
+    /// True when something can cast a caustic: at least one light and one caster.
+    pub fn is_active(&self) -> bool {
+        !self.lights.is_empty() && self.casters > 0
+    }
+}
+
+#[derive(Default)]
+struct BlasCache(HashMap<AssetId<Mesh>, Arc<Blas>>);
+
+/// Plain-Rust geometry of a Bevy mesh: triangle lists only, positions as `Float32x3`.
+pub fn mesh_geometry(mesh: &Mesh) -> Option<MeshGeometry> {
+    if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
+        return None;
+    }
+    let Ok(VertexAttributeValues::Float32x3(p)) = mesh.try_attribute(Mesh::ATTRIBUTE_POSITION) else {
+        return None;
+    };
+    let positions: Vec<GVec3> = p.iter().map(|v| GVec3::from_array(*v)).collect();
+    let normals = match mesh.try_attribute(Mesh::ATTRIBUTE_NORMAL) {
+        Ok(VertexAttributeValues::Float32x3(n)) if n.len() == positions.len() => {
+            Some(n.iter().map(|v| GVec3::from_array(*v)).collect())
+        }
+        _ => None,
+    };
+    let flat: Vec<u32> = match mesh.try_indices() {
+        Ok(Indices::U16(i)) => i.iter().map(|&x| x as u32).collect(),
+        Ok(Indices::U32(i)) => i.clone(),
+        Err(_) => (0..positions.len() as u32).collect(),
+    };
+    let indices = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Some(MeshGeometry { positions, normals, indices })
+}
+
+/// The classifier's view of a `StandardMaterial`.
+pub fn material_params(m: &StandardMaterial) -> MaterialParams {
+    let c = m.base_color.to_linear();
+    let a = m.attenuation_color.to_linear();
+    MaterialParams {
+        base_color: GVec3::new(c.red, c.green, c.blue),
+        metallic: m.metallic,
+        perceptual_roughness: m.perceptual_roughness,
+        specular_transmission: m.specular_transmission,
+        ior: m.ior,
+        thickness: m.thickness,
+        attenuation_distance: m.attenuation_distance,
+        attenuation_color: GVec3::new(a.red, a.green, a.blue),
+    }
+}
+
+fn override_surface(m: &CausticMaterial) -> Surface {
+    let rgb = |c: &Color| {
+        let l = c.to_linear();
+        GVec3::new(l.red, l.green, l.blue).clamp(GVec3::ZERO, GVec3::ONE)
+    };
+    match m {
+        CausticMaterial::Dielectric { ior, attenuation_color, attenuation_distance, thin } => Surface::Dielectric {
+            ior: if ior.is_finite() { ior.clamp(1.0, 4.0) } else { 1.0 },
+            attenuation_color: rgb(attenuation_color),
+            attenuation_distance: *attenuation_distance,
+            thin: *thin,
+        },
+        CausticMaterial::Mirror { reflectance } => Surface::Conductor { f0: rgb(reflectance) },
+        CausticMaterial::Receiver { albedo } => Surface::Diffuse { albedo: rgb(albedo) },
+    }
+}
+
+fn light_rgb(c: Color) -> GVec3 {
+    let l = c.to_linear();
+    GVec3::new(l.red, l.green, l.blue)
+}
+
+type MeshQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static Mesh3d,
+        Option<&'static MeshMaterial3d<StandardMaterial>>,
+        Option<&'static CausticMaterial>,
+        &'static GlobalTransform,
+        Option<&'static InheritedVisibility>,
+        Option<&'static Name>,
+    ),
+>;
+
+type LightQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static CausticLight,
+        &'static GlobalTransform,
+        Option<&'static DirectionalLight>,
+        Option<&'static PointLight>,
+        Option<&'static SpotLight>,
+    ),
+>;
+
+/// Change detection inputs of [`gather_scene`].
+type Dirty<'w, 's> = (
+    Query<'w, 's, (), Or<(Changed<Mesh3d>, Changed<MeshMaterial3d<StandardMaterial>>, Changed<CausticMaterial>, Changed<GlobalTransform>, Changed<InheritedVisibility>)>>,
+    Query<'w, 's, (), Or<(Changed<CausticLight>, Changed<DirectionalLight>, Changed<PointLight>, Changed<SpotLight>)>>,
+    RemovedComponents<'w, 's, Mesh3d>,
+    RemovedComponents<'w, 's, CausticLight>,
+    MessageReader<'w, 's, AssetEvent<Mesh>>,
+    MessageReader<'w, 's, AssetEvent<StandardMaterial>>,
+);
+
+#[allow(clippy::too_many_arguments)]
+fn gather_scene(
+    mut scene: ResMut<CausticsScene>,
+    mut cache: Local<BlasCache>,
+    mut warned: Local<HashSet<Entity>>,
+    mut warnings: ResMut<CausticsWarnings>,
+    meshes_q: MeshQuery,
+    lights_q: LightQuery,
+    (dirty_meshes, dirty_lights, mut removed_meshes, mut removed_lights, mut mesh_events, mut mat_events): Dirty,
+    meshes: Res<Assets<Mesh>>,
+    materials: Res<Assets<StandardMaterial>>,
+) {
+    let mut dirty = false;
+    for ev in mesh_events.read() {
+        if let AssetEvent::Modified { id } | AssetEvent::Removed { id } | AssetEvent::Unused { id } = ev {
+            cache.0.remove(id);
+        }
+        dirty = true;
+    }
+    dirty |= mat_events.read().count() > 0;
+    dirty |= !dirty_meshes.is_empty() || !dirty_lights.is_empty();
+    dirty |= removed_meshes.read().count() > 0 || removed_lights.read().count() > 0;
+    if lights_q.is_empty() {
+        // No caustic light: nothing to gather, nothing will run.
+        if !scene.lights.is_empty() || scene.casters > 0 {
+            let builds = (scene.blas_builds, scene.degenerate_triangles);
+            *scene = CausticsScene { generation: scene.generation + 1, blas_builds: builds.0, degenerate_triangles: builds.1, ..default() };
+        }
+        return;
+    }
+    if !dirty && scene.generation > 0 {
+        return;
+    }
+    let mut instances = Vec::new();
+    let (mut casters, mut receivers) = (0, 0);
+    for (entity, mesh3d, std_mat, over, gt, vis, name) in &meshes_q {
+        if vis.is_some_and(|v| !v.get()) {
+            continue;
+        }
+        let surface = match (over, std_mat.and_then(|m| materials.get(&m.0))) {
+            (Some(o), _) => override_surface(o),
+            (None, Some(m)) => {
+                let params = material_params(m);
+                if m.specular_transmission > 0.0 && !(m.ior >= 1.0) && warned.insert(entity) {
+                    warnings.report(entity, name, "StandardMaterial", "ior", &format!("{} is below 1 for a transmissive material; clamped to 1", m.ior));
+                }
+                classify_material(&params)
+            }
+            (None, None) => continue,
+        };
+        let id = mesh3d.0.id();
+        let blas = if let Some(b) = cache.0.get(&id) {
+            b.clone()
+        } else {
+            let Some(mesh) = meshes.get(id) else { continue };
+            let Some(geo) = mesh_geometry(mesh) else {
+                if warned.insert(entity) {
+                    warnings.report(entity, name, "Mesh3d", "mesh", "not a triangle list with Float32x3 positions (or its CPU data was dropped); ignored for caustics");
+                }
+                continue;
+            };
+            let b = Arc::new(Blas::build(Arc::new(geo)));
+            scene.blas_builds += 1;
+            scene.degenerate_triangles += b.degenerate_triangles as u64;
+            cache.0.insert(id, b.clone());
+            b
+        };
+        if surface.is_specular() {
+            casters += 1;
+        } else {
+            receivers += 1;
+        }
+        instances.push(Instance::new(blas, gt.affine(), surface, entity.to_bits()));
+    }
+    let mut lights = Vec::new();
+    for (entity, cl, gt, dir, point, spot) in &lights_q {
+        let s = cl.intensity_scale;
+        let pos = gt.translation();
+        let fwd = gt.forward().as_vec3();
+        let l = if let Some(d) = dir {
+            TraceLight::Directional { direction: fwd, illuminance: light_rgb(d.color) * d.illuminance * s }
+        } else if let Some(sp) = spot {
+            TraceLight::Spot {
+                position: pos,
+                direction: fwd,
+                flux: light_rgb(sp.color) * sp.intensity * s,
+                inner_angle: sp.inner_angle,
+                outer_angle: sp.outer_angle,
+            }
+        } else if let Some(p) = point {
+            TraceLight::Point { position: pos, flux: light_rgb(p.color) * p.intensity * s }
+        } else {
+            continue;
+        };
+        lights.push((entity, l));
+    }
+    scene.tlas = Arc::new(Tlas::build(instances));
+    scene.lights = lights;
+    scene.casters = casters;
+    scene.receivers = receivers;
+    scene.generation += 1;
+}
+
+/// Registers [`CausticsScene`] and its gathering system.
+pub struct ScenePlugin;
+
+impl Plugin for ScenePlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<CausticsScene>().add_systems(
+            PostUpdate,
+            gather_scene
+                .in_set(crate::CausticsSystems::Gather)
+                .after(bevy::transform::TransformSystems::Propagate),
+        );
+    }
+}

@@ -1,0 +1,10 @@
+//! Main-world scene gathering: which meshes are casters and receivers, with what surface,
+//! and the CPU BVH over them (rebuilt only for meshes that changed).
+
+pub mod bvh;
+pub mod collect;
+pub mod model;
+
+pub use bvh::{Blas, Hit, Instance, MeshGeometry, Tlas};
+pub use collect::{CausticsScene, ScenePlugin};
+pub use model::*;

@@ -1,0 +1,505 @@
+//! CPU tests: the optics core (unit + property tests at the extremes), the BVH, the reference
+//! tracer against closed forms, metrics, validation and the scene files. No GPU.
+
+use bevy_caustics::optics::*;
+use bevy_caustics::reference::{CausticImage, TraceSettings, compare, trace};
+use bevy_caustics::scene::{CameraProjection, Surface, TraceCamera};
+use bevy_caustics::scenes;
+use glam::{Vec2, Vec3};
+use proptest::prelude::*;
+
+fn unit(v: (f32, f32, f32)) -> Vec3 {
+    Vec3::new(v.0, v.1, v.2).try_normalize().unwrap_or(Vec3::Y)
+}
+
+fn cases(n: u32) -> ProptestConfig {
+    ProptestConfig { cases: n, ..ProptestConfig::default() }
+}
+
+// ---------------------------------------------------------------- optics: fixed extremes
+
+#[test]
+fn fresnel_known_values() {
+    // Normal incidence: ((n1 - n2) / (n1 + n2))^2.
+    assert!((fresnel_dielectric(1.0, 1.0 / 1.5) - 0.04).abs() < 1e-6);
+    assert!((fresnel_dielectric(1.0, 1.0 / 4.0) - 0.36).abs() < 1e-6);
+    // IOR 1.0: no interface, no reflection, full transmission.
+    for c in [0.0, 1e-6, 0.3, 1.0] {
+        if c > 0.0 {
+            assert_eq!(fresnel_dielectric(c, 1.0), 0.0);
+            assert!((fresnel_dielectric_transmittance(c, 1.0) - 1.0).abs() < 1e-6);
+        }
+    }
+    // Grazing incidence reflects everything.
+    assert_eq!(fresnel_dielectric(0.0, 1.0 / 1.5), 1.0);
+    // Brewster angle: R_p = 0, so R = R_s / 2.
+    let theta_b = 1.5f32.atan();
+    let r = fresnel_dielectric(theta_b.cos(), 1.0 / 1.5);
+    let cos_t = (1.0 - (theta_b.sin() / 1.5).powi(2)).sqrt();
+    let rs = ((theta_b.cos() - 1.5 * cos_t) / (theta_b.cos() + 1.5 * cos_t)).powi(2);
+    assert!((r - rs / 2.0).abs() < 1e-6);
+    // Conductor at normal incidence: ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2).
+    let (n, k) = (0.2f32, 3.6f32);
+    let expect = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+    assert!((fresnel_conductor(1.0, n, k) - expect).abs() < 1e-4);
+    assert!(fresnel_conductor(0.0, n, k) > 0.99);
+    // Schlick reproduces F0 and goes to 1 at grazing.
+    assert_eq!(fresnel_schlick(1.0, Vec3::splat(0.9)), Vec3::splat(0.9));
+    assert_eq!(fresnel_schlick(0.0, Vec3::splat(0.2)), Vec3::ONE);
+}
+
+#[test]
+fn refraction_extremes() {
+    let n = Vec3::Y;
+    // Normal incidence goes straight through.
+    assert!((refract(Vec3::NEG_Y, n, 1.0 / 1.5).unwrap() - Vec3::NEG_Y).length() < 1e-6);
+    // IOR 1 never bends.
+    let d = Vec3::new(0.6, -0.8, 0.0);
+    assert!((refract(d, n, 1.0).unwrap() - d).length() < 1e-6);
+    // Beyond the critical angle inside glass: total internal reflection.
+    let inside = Vec3::new(0.8, 0.6, 0.0); // travelling up from inside, 53 degrees
+    assert!(refract(inside, n, 1.5).is_none());
+    assert!(fresnel_dielectric(inside.y, 1.5) == 1.0);
+    // IOR 4 from inside: critical angle 14.5 degrees.
+    assert!((critical_cos(4.0) - (1.0f32 - 1.0 / 16.0).sqrt()).abs() < 1e-6);
+    // Exactly grazing: still finite.
+    let g = refract(Vec3::X, n, 1.0 / 1.33).unwrap();
+    assert!(g.is_finite() && g.y <= 0.0);
+}
+
+#[test]
+fn beer_lambert_cases() {
+    let c = Vec3::new(0.5, 0.25, 1.0);
+    let t = beer_lambert(c, 2.0, 2.0);
+    assert!((t - c).length() < 1e-6);
+    assert!((beer_lambert(c, 2.0, 4.0) - c * c).length() < 1e-6);
+    assert_eq!(beer_lambert(c, f32::INFINITY, 1e9), Vec3::ONE);
+    assert_eq!(beer_lambert(Vec3::ZERO, 1.0, 1.0), Vec3::ZERO);
+    assert!(beer_lambert(c, 1e-30, 1e30).is_finite());
+}
+
+#[test]
+fn footprint_matches_projected_pixel_quad() {
+    // A 64x64 camera with 60 degree fov at the origin looking down -Z at a tilted plane. The
+    // exact footprint is the area of the quad the pixel's four corner rays cut from the plane.
+    let (w, h, fov) = (64u32, 64u32, 60f32.to_radians());
+    let focal = PixelFocal::from_fov_y(fov, w, h);
+    let plane_n = Vec3::new(0.3, 0.2, 1.0).normalize();
+    let plane_d = -5.0; // n . x = d
+    let hit = |px: f32, py: f32| {
+        let dir = Vec3::new((px - 0.5 * w as f32) / focal.fx, -(py - 0.5 * h as f32) / focal.fy, -1.0);
+        dir * (plane_d / plane_n.dot(dir))
+    };
+    for (px, py) in [(32u32, 32u32), (0, 0), (63, 10), (5, 60), (40, 20)] {
+        let (x, y) = (px as f32, py as f32);
+        let q = [hit(x, y), hit(x + 1.0, y), hit(x + 1.0, y + 1.0), hit(x, y + 1.0)];
+        let exact = 0.5 * ((q[2] - q[0]).cross(q[3] - q[1])).length();
+        let c = hit(x + 0.5, y + 0.5);
+        let dist = c.length();
+        let view = c / dist;
+        let area = pixel_footprint_area(dist, -view.z, view.dot(plane_n), focal);
+        assert!((area / exact - 1.0).abs() < 2e-3, "pixel ({px},{py}): {area} vs exact {exact}");
+    }
+    // Guards.
+    assert_eq!(pixel_footprint_area(0.0, 1.0, 1.0, focal), 0.0);
+    assert!(pixel_footprint_area(1e4, 1.0, 0.0, focal).is_finite());
+    assert_eq!(irradiance_from_flux(Vec3::ONE, 0.0), Vec3::ZERO);
+    assert_eq!(irradiance_from_flux(Vec3::splat(f32::NAN), 1.0), Vec3::ZERO);
+}
+
+#[test]
+fn sampling_mappings() {
+    let mut rng = Pcg32::new(7, 3);
+    let mut sum = Vec3::ZERO;
+    for _ in 0..20_000 {
+        let d = uniform_sphere(rng.next_vec2());
+        assert!((d.length() - 1.0).abs() < 1e-5);
+        sum += d;
+        let p = concentric_disc(rng.next_vec2());
+        assert!(p.length() <= 1.0 + 1e-6);
+        let c = uniform_cone(rng.next_vec2(), 0.9);
+        assert!(c.z >= 0.9 - 1e-6);
+    }
+    assert!((sum / 20_000.0).length() < 0.02, "sphere samples are not centred: {sum}");
+    for n in [Vec3::Z, Vec3::NEG_Z, Vec3::X, Vec3::new(0.0, -1e-7, -1.0).normalize()] {
+        let (t, b) = orthonormal_basis(n);
+        assert!(t.dot(n).abs() < 1e-5 && b.dot(n).abs() < 1e-5 && t.dot(b).abs() < 1e-5);
+        assert!(t.is_finite() && b.is_finite());
+    }
+    // Bevy's spot falloff: full inside the inner cone, zero outside the outer.
+    assert_eq!(spot_attenuation(1.0, 0.2, 0.5), 1.0);
+    assert_eq!(spot_attenuation(0.6f32.cos(), 0.2, 0.5), 0.0);
+}
+
+#[test]
+fn ray_offset_is_scale_independent() {
+    for s in [1e-3f32, 1.0, 1e4] {
+        for p in [Vec3::ZERO, Vec3::splat(0.3 * s), Vec3::new(-s, 2.0 * s, 0.5 * s)] {
+            let o = offset_ray_origin(p, Vec3::Y, s);
+            assert!(o.y > p.y, "offset did not move off the surface at scale {s}");
+            assert!(o.y - p.y < 1e-3 * s, "offset too large at scale {s}: {}", o.y - p.y);
+            assert!(o.is_finite());
+        }
+    }
+}
+
+// ---------------------------------------------------------------- optics: properties
+
+proptest! {
+    #![proptest_config(cases(5000))]
+
+    /// R + T = 1, with T from the transmitted field (not 1 - R), for IOR 1 to 4 both ways.
+    #[test]
+    fn fresnel_energy_conservation(cos_i in 0.0f32..=1.0, ior in 1.0f32..=4.0, inside in any::<bool>()) {
+        let eta = if inside { ior } else { 1.0 / ior };
+        let r = fresnel_dielectric(cos_i, eta);
+        let t = fresnel_dielectric_transmittance(cos_i, eta);
+        prop_assert!(r.is_finite() && t.is_finite());
+        prop_assert!((0.0..=1.0).contains(&r) && (0.0..=1.0).contains(&t));
+        if cos_i > 1e-3 {
+            prop_assert!((r + t - 1.0).abs() < 2e-4, "R {} + T {} at cos {} eta {}", r, t, cos_i, eta);
+        }
+    }
+
+    /// Reciprocity (Stokes): R from outside at θi equals R from inside at θt.
+    #[test]
+    fn fresnel_reciprocity(cos_i in 0.01f32..=1.0, ior in 1.0f32..=4.0) {
+        let eta = 1.0 / ior;
+        let sin_t = eta * (1.0 - cos_i * cos_i).sqrt();
+        let cos_t = (1.0 - sin_t * sin_t).sqrt();
+        let a = fresnel_dielectric(cos_i, eta);
+        let b = fresnel_dielectric(cos_t, ior);
+        prop_assert!((a - b).abs() < 5e-4, "{} vs {}", a, b);
+    }
+
+    /// Beyond the critical angle everything reflects and refraction reports TIR.
+    #[test]
+    fn total_internal_reflection(ior in 1.01f32..=4.0, f in 0.0f32..0.999) {
+        let cos_c = critical_cos(ior);
+        let cos_i = cos_c * f;
+        let d = Vec3::new((1.0 - cos_i * cos_i).sqrt(), cos_i, 0.0);
+        prop_assert_eq!(fresnel_dielectric(cos_i, ior), 1.0);
+        prop_assert!(refract(d, Vec3::Y, ior).is_none());
+    }
+
+    /// Snell's law, unit length and the right side, for any direction, normal side and IOR.
+    #[test]
+    fn refraction_obeys_snell(d in (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), n in (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), ior in 1.0f32..=4.0, inside in any::<bool>()) {
+        let (d, n) = (unit(d), unit(n));
+        let eta = if inside { ior } else { 1.0 / ior };
+        let r = reflect(d, n);
+        prop_assert!(r.is_finite() && (r.length() - 1.0).abs() < 1e-4);
+        prop_assert!((r.dot(n) + d.dot(n)).abs() < 1e-4);
+        if let Some(t) = refract(d, n, eta) {
+            prop_assert!(t.is_finite() && (t.length() - 1.0).abs() < 1e-4);
+            let sin_i = d.cross(n).length();
+            let sin_t = t.cross(n).length();
+            prop_assert!((eta * sin_i - sin_t).abs() < 2e-3, "eta sin_i {} vs sin_t {}", eta * sin_i, sin_t);
+            // Transmitted light stays on the far side of the surface.
+            prop_assert!(t.dot(n) * d.dot(n) >= -1e-4);
+        }
+    }
+
+    /// No NaN or infinity anywhere in the core for any finite input.
+    #[test]
+    fn no_nan_anywhere(c in -2.0f32..2.0, eta in 0.0f32..8.0, dist in 0.0f32..1e6, ca in -1.0f32..1.0, cs in -1.0f32..1.0, flux in 0.0f32..1e9, area in 0.0f32..1e6, len in 0.0f32..1e6, col in 0.0f32..1.0) {
+        prop_assert!(fresnel_dielectric(c, eta).is_finite());
+        prop_assert!(fresnel_dielectric_transmittance(c, eta).is_finite());
+        prop_assert!(fresnel_conductor(c, eta, col * 5.0).is_finite());
+        prop_assert!(fresnel_schlick(c, Vec3::splat(col)).is_finite());
+        let focal = PixelFocal::from_fov_y(ca.abs() * 3.0, 128, 128);
+        prop_assert!(pixel_footprint_area(dist, ca, cs, focal).is_finite());
+        prop_assert!(ortho_footprint_area(dist, dist, cs).is_finite());
+        prop_assert!(irradiance_from_flux(Vec3::splat(flux), area).is_finite());
+        prop_assert!(beer_lambert(Vec3::splat(col), dist, len).is_finite());
+        prop_assert!(lambert_radiance(Vec3::splat(col), Vec3::splat(flux)).is_finite());
+    }
+}
+
+// ---------------------------------------------------------------- BVH
+
+#[test]
+fn bvh_matches_brute_force() {
+    let desc = scenes::glass_sphere();
+    let (tlas, _, _) = desc.to_trace(16, 16);
+    let mut rng = Pcg32::new(11, 0);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let o = Vec3::new(rng.next_f32() * 4.0 - 2.0, rng.next_f32() * 3.0, rng.next_f32() * 4.0 - 2.0);
+        let d = uniform_sphere(rng.next_vec2());
+        let bvh = tlas.closest_hit(o, d, 0.0, f32::INFINITY, |_| false);
+        // Brute force over every triangle of every instance.
+        let mut best: Option<(f32, u32, u32)> = None;
+        for (ii, inst) in tlas.instances.iter().enumerate() {
+            let g = &inst.blas.geometry;
+            for (ti, t) in g.indices.iter().enumerate() {
+                let [a, b, c] = t.map(|k| inst.world_from_local.transform_point3(g.positions[k as usize]));
+                if let Some((tt, _)) = bevy_caustics::scene::bvh::intersect_triangle(o, d, a, b - a, c - a, 0.0, f32::INFINITY)
+                    && best.is_none_or(|x| tt < x.0)
+                {
+                    best = Some((tt, ii as u32, ti as u32));
+                }
+            }
+        }
+        match (bvh, best) {
+            (Some(h), Some((t, i, tri))) => {
+                hits += 1;
+                assert!((h.t - t).abs() <= 1e-4 * t.max(1.0), "t {} vs {}", h.t, t);
+                // Same triangle, or a tie on a shared edge at the same distance.
+                assert!(h.instance == i && (h.triangle == tri || (h.t - t).abs() < 1e-6));
+            }
+            (None, None) => {}
+            (a, b) => panic!("BVH {a:?} vs brute force {b:?}"),
+        }
+    }
+    assert!(hits > 500);
+}
+
+#[test]
+fn degenerate_triangles_are_skipped() {
+    use bevy_caustics::scene::{Blas, MeshGeometry};
+    use std::sync::Arc;
+    let g = MeshGeometry {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0, Vec3::Y, Vec3::splat(f32::NAN)],
+        normals: None,
+        indices: vec![[0, 1, 2], [0, 0, 0], [0, 1, 3], [0, 1, 4], [0, 1, 99]],
+    };
+    let b = Blas::build(Arc::new(g));
+    assert_eq!(b.triangle_count(), 1);
+    assert_eq!(b.degenerate_triangles, 4);
+    let empty = Blas::build(Arc::new(MeshGeometry::default()));
+    assert!(empty.intersect(Vec3::ZERO, Vec3::X, 0.0, 1.0).is_none());
+}
+
+// ---------------------------------------------------------------- reference tracer
+
+const N: u64 = 1 << 20;
+
+/// Mean irradiance over the pixels whose eye ray meets the plane `n . x = d` inside `inside`.
+fn region_mean(img: &CausticImage, cam: &TraceCamera, n: Vec3, d: f32, inside: impl Fn(Vec3) -> bool) -> (f32, usize) {
+    let CameraProjection::Perspective { fov_y } = cam.projection else { unreachable!() };
+    let focal = PixelFocal::from_fov_y(fov_y, cam.width, cam.height);
+    let eye = cam.position();
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let local = Vec3::new(
+                (x as f32 + 0.5 - 0.5 * cam.width as f32) / focal.fx,
+                -(y as f32 + 0.5 - 0.5 * cam.height as f32) / focal.fy,
+                -1.0,
+            );
+            let dir = cam.world_from_view.transform_vector3(local).normalize();
+            let t = (d - n.dot(eye)) / n.dot(dir);
+            if t > 0.0 && inside(eye + dir * t) {
+                sum += luminance(img.get(x, y)) as f64;
+                count += 1;
+            }
+        }
+    }
+    ((sum / count.max(1) as f64) as f32, count)
+}
+
+#[test]
+fn reference_mirror_wall_closed_form() {
+    let desc = scenes::mirror_wall();
+    let (tlas, lights, cam) = desc.to_trace(128, 128);
+    let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: N, seed: 3, ..Default::default() }, None);
+    assert!(out.image.all_finite());
+    let a = scenes::MIRROR_WALL_INCIDENCE;
+    // The reflected beam keeps E_perp * R(θ); on the wall (normal -X) it arrives at cos = sin 45.
+    let r = fresnel_schlick(a.cos(), Vec3::splat(0.9)).x;
+    let expect = scenes::SUN_LUX * r * a.sin();
+    let (mean, px) = region_mean(&out.image, &cam, Vec3::NEG_X, -3.0, |p| (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25);
+    let err = mean / expect - 1.0;
+    println!("mirror_wall: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %", err * 100.0);
+    assert!(px > 200);
+    assert!(err.abs() < 0.02);
+}
+
+#[test]
+fn reference_glass_slab_closed_form() {
+    let desc = scenes::glass_slab();
+    let (tlas, lights, cam) = desc.to_trace(128, 128);
+    let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: N, seed: 5, ..Default::default() }, None);
+    let a = scenes::GLASS_SLAB_INCIDENCE;
+    // Two interfaces plus every even number of internal reflections: T^2 / (1 - R^2).
+    let r = fresnel_dielectric(a.cos(), 1.0 / 1.5);
+    let expect = scenes::SUN_LUX * a.cos() * (1.0 - r) / (1.0 + r);
+    let (mean, px) = region_mean(&out.image, &cam, Vec3::Y, 0.0, |p| (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3);
+    let err = mean / expect - 1.0;
+    println!("glass_slab: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %", err * 100.0);
+    assert!(px > 200);
+    assert!(err.abs() < 0.02);
+}
+
+#[test]
+fn reference_glass_sphere_power() {
+    let desc = scenes::glass_sphere();
+    let (tlas, lights, cam) = desc.to_trace(128, 128);
+    let t0 = std::time::Instant::now();
+    let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: N, seed: 9, ..Default::default() }, None);
+    let secs = t0.elapsed().as_secs_f64();
+    println!("glass_sphere: {} photons in {secs:.2} s = {:.2} M photons/s", out.stats.photons_emitted, out.stats.photons_emitted as f64 / secs / 1e6);
+    // Power entering the ball times the two Fresnel transmittances, integrated over the disc.
+    let r = scenes::SPHERE_RADIUS as f64;
+    let steps = 20_000;
+    let mut expect = 0.0f64;
+    for i in 0..steps {
+        let b = (i as f64 + 0.5) / steps as f64 * r;
+        let cos_i = (1.0 - (b / r).powi(2)).sqrt() as f32;
+        let t = 1.0 - fresnel_dielectric(cos_i, 1.0 / 1.5) as f64;
+        expect += t * t * 2.0 * std::f64::consts::PI * b * (r / steps as f64);
+    }
+    // The mesh's silhouette is a regular polygon, not a circle.
+    let n = scenes::SPHERE_SEGMENTS as f64;
+    expect *= n / (2.0 * std::f64::consts::PI) * (2.0 * std::f64::consts::PI / n).sin();
+    expect *= scenes::SUN_LUX as f64;
+    let tt = out.stats.flux_per_path.get(&(0, 2)).map_or(0.0, |v| v.y);
+    let err = tt / expect - 1.0;
+    println!("glass_sphere: two-refraction power {tt:.1} lm vs closed form {expect:.1} lm, error {:.3} %", err * 100.0);
+    assert!(err.abs() < 0.02);
+    // Energy is never created: everything on the floor came through the ball's cross-section.
+    let entering = scenes::SUN_LUX as f64 * std::f64::consts::PI * r * r;
+    assert!(out.stats.flux_deposited.y <= entering);
+    assert!(out.image.all_finite());
+}
+
+#[test]
+fn reference_is_deterministic() {
+    let desc = scenes::ring();
+    let (tlas, lights, cam) = desc.to_trace(64, 64);
+    let s = TraceSettings { photons_per_light: 50_000, seed: 42, ..Default::default() };
+    let a = trace(&tlas, &lights, &cam, &s, None);
+    let b = trace(&tlas, &lights, &cam, &s, None);
+    assert_eq!(a.image, b.image);
+    assert!(a.stats.photons_in_view > 1000, "the ring makes no caustic in view");
+    let c = trace(&tlas, &lights, &cam, &TraceSettings { seed: 43, ..s }, None);
+    assert_ne!(a.image, c.image);
+}
+
+#[test]
+fn reference_extreme_inputs_stay_finite() {
+    // Zero photons, IOR 1 and 4, grazing light, millimetre and 10 km scenes.
+    let base = scenes::glass_slab();
+    let mut variants = Vec::new();
+    for ior in [1.0f32, 4.0] {
+        let mut d = base.clone();
+        d.materials[1].params.ior = ior;
+        variants.push((format!("ior {ior}"), d, 1.0));
+    }
+    for deg in [89.0f32, 89.9] {
+        let mut d = base.clone();
+        let a = deg.to_radians();
+        d.lights[0].rotation = scenes::shine_along(Vec3::new(a.sin(), -a.cos(), 0.0));
+        variants.push((format!("{deg} degrees"), d, 1.0));
+    }
+    variants.push(("1e-3 scale".into(), base.clone(), 1e-3));
+    variants.push(("1e4 scale".into(), base.clone(), 1e4));
+    for (name, mut d, s) in variants {
+        for n in &mut d.nodes {
+            n.translation *= s;
+            n.scale *= s;
+        }
+        d.camera.translation *= s;
+        let (tlas, lights, cam) = d.to_trace(32, 32);
+        for photons in [0, 20_000] {
+            let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: photons, ..Default::default() }, None);
+            assert!(out.image.all_finite(), "{name}: non-finite pixel");
+            assert!(out.stats.flux_deposited.is_finite(), "{name}");
+            if photons == 0 {
+                assert_eq!(out.image.sum(), glam::DVec3::ZERO);
+            }
+            if name == "ior 1" && photons > 0 {
+                // IOR 1: no interface. Light passes unbent and unreflected (only transmitted
+                // light, no focusing): floor irradiance equals the direct beam.
+                assert!(out.stats.flux_per_path.keys().all(|(r, _)| *r == 0), "{name}: reflections at IOR 1");
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_scene_traces_nothing() {
+    let (tlas, lights, cam) = scenes::empty().to_trace(32, 32);
+    let out = trace(&tlas, &lights, &cam, &TraceSettings::default(), None);
+    assert_eq!(out.stats.photons_emitted, 0);
+    assert!(!tlas.instances.iter().any(|i| i.surface.is_specular()));
+    assert!(matches!(tlas.instances[0].surface, Surface::Diffuse { .. }));
+}
+
+// ---------------------------------------------------------------- metrics, validation, files
+
+#[test]
+fn metrics_behave() {
+    let mut a = CausticImage::new(32, 32);
+    for (i, p) in a.data.iter_mut().enumerate() {
+        *p = Vec3::splat(((i * 37) % 101) as f32);
+    }
+    let m = compare(&a, &a, None).unwrap();
+    assert_eq!((m.rmse, m.energy_error), (0.0, 0.0));
+    assert!(m.flip < 1e-6);
+    let mut b = a.clone();
+    for p in &mut b.data {
+        *p *= 1.1;
+    }
+    let m = compare(&b, &a, None).unwrap();
+    assert!((m.energy_error - 0.1).abs() < 1e-4);
+    assert!(m.rmse > 0.0 && m.flip > 0.0);
+    assert!(compare(&CausticImage::new(2, 2), &a, None).is_none());
+}
+
+#[test]
+fn exr_round_trip() {
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_exr_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut a = CausticImage::new(7, 5);
+    a.data[3] = Vec3::new(1e5, 0.5, 3.0);
+    a.write_exr(dir.join("a.exr")).unwrap();
+    assert_eq!(CausticImage::read_exr(dir.join("a.exr")).unwrap(), a);
+    assert!(CausticImage::read_exr(dir.join("missing.exr")).is_err());
+}
+
+#[test]
+fn invalid_component_values_are_clamped() {
+    use bevy_caustics::components::validate::*;
+    use bevy_caustics::{CausticLight, CausticMaterial, CausticsVolume};
+    let mut v = CausticsVolume { slabs: 0, size: Vec3::new(0.0, -1.0, f32::NAN), photons: -5, ..Default::default() };
+    let fixes = sanitize_volume(&mut v);
+    let fields: Vec<_> = fixes.iter().map(|f| f.0).collect();
+    assert_eq!(fields, ["size", "slabs", "photons"]);
+    assert_eq!((v.slabs, v.photons, v.size), (1, 0, Vec3::splat(1e-3)));
+    assert!(sanitize_volume(&mut v).is_empty(), "a clamped value must be valid (one warning only)");
+    let mut m = CausticMaterial::glass(0.5);
+    assert_eq!(sanitize_material(&mut m).len(), 1);
+    assert_eq!(m, CausticMaterial::glass(1.0));
+    let mut l = CausticLight { intensity_scale: f32::NAN };
+    assert_eq!(sanitize_light(&mut l).len(), 1);
+    assert_eq!(l.intensity_scale, 0.0);
+    assert!(sanitize_light(&mut CausticLight::default()).is_empty());
+}
+
+#[test]
+fn scene_files_are_current() {
+    // The committed glTF files are exactly what the generator writes.
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_scenes_{}", std::process::id()));
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    for s in scenes::all() {
+        scenes::gltf::write_gltf(&s, &dir).unwrap();
+        for ext in ["gltf", "bin"] {
+            let f = format!("{}.{ext}", s.name);
+            let new = std::fs::read(dir.join(&f)).unwrap();
+            let old = std::fs::read(repo.join(&f)).unwrap_or_default();
+            assert!(new == old, "assets/scenes/{f} is stale: run cargo run --release --example make_scenes");
+        }
+    }
+}
+
+#[test]
+fn rng_streams_differ() {
+    let mut a = Pcg32::new(1, 1);
+    let mut b = Pcg32::new(1, 2);
+    let same = (0..64).filter(|_| a.next_u32() == b.next_u32()).count();
+    assert!(same < 4);
+    let v: Vec2 = Pcg32::new(5, 5).next_vec2();
+    assert!((0.0..1.0).contains(&v.x) && (0.0..1.0).contains(&v.y));
+}

@@ -1,0 +1,156 @@
+//! GPU tests on whatever Vulkan adapter exists (lavapipe in CI). They never skip: without an
+//! adapter they fail (set BEVY_CAUSTICS_ALLOW_NO_GPU=1 to skip on a developer machine).
+//! Bevy apps run one at a time (a global lock), each on a small target.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Mutex;
+
+use bevy_caustics::headless::{RenderJob, find_adapter, run};
+
+static GPU: Mutex<()> = Mutex::new(());
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes").join(format!("{name}.gltf"))
+}
+
+fn require_gpu() -> bool {
+    match find_adapter() {
+        Ok(name) => {
+            println!("adapter: {name}");
+            true
+        }
+        Err(e) if std::env::var_os("BEVY_CAUSTICS_ALLOW_NO_GPU").is_some() => {
+            println!("skipped: {e}");
+            false
+        }
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// The composite adds exactly albedo / π · E · exposure: the frame with caustics minus the
+/// same frame from a twin camera without `Caustics` equals that, pixel by pixel, for the
+/// known buffer E (the reference image uploaded into the caustics buffer).
+#[test]
+fn composite_adds_albedo_over_pi_times_irradiance() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        width: 128,
+        height: 128,
+        photons: Some(1 << 18),
+        frames: 6,
+        linear: true,
+        ..Default::default()
+    })
+    .expect("render");
+    println!("report: {}", serde_json::to_string(&report).unwrap());
+    let e = report.caustics.as_ref().expect("caustics buffer");
+    assert_eq!(report.passes, ["caustics/composite"]);
+    assert_eq!(report.linear_with.len(), 128 * 128);
+    assert_eq!(report.linear_without.len(), 128 * 128);
+    let albedo = 0.8f32; // the floor of glass_sphere
+    let (mut checked, mut worst) = (0, 0.0f32);
+    for (i, (w, wo)) in report.linear_with.iter().zip(&report.linear_without).enumerate() {
+        let expect = albedo / std::f32::consts::PI * e.data[i] * report.exposure;
+        for c in 0..3 {
+            let got = w[c] - wo[c];
+            assert!(w[c].is_finite());
+            // f16 target: about 1e-3 relative precision on each of the two frames.
+            let tol = 4e-3 * w[c].abs().max(wo[c].abs()) + 1e-4;
+            let err = (got - expect[c]).abs();
+            assert!(err <= tol.max(0.01 * expect[c]), "pixel {i} channel {c}: got {got}, expected {}", expect[c]);
+            worst = worst.max(err / expect[c].max(1e-3));
+        }
+        if e.data[i].x > 0.0 {
+            checked += 1;
+        }
+    }
+    println!("composite: {checked} caustic pixels checked, worst relative error {worst:.2e}, exposure {}", report.exposure);
+    assert!(checked > 300, "too few caustic pixels: {checked}");
+    println!("composite pass: {:?} ({})", report.pass_ms, report.timing);
+}
+
+/// A scene without a caster dispatches no caustics pass and leaves the buffer empty.
+#[test]
+fn empty_scene_dispatches_nothing() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let report = run(RenderJob { scene: scene("empty"), width: 64, height: 64, frames: 6, ..Default::default() }).expect("render");
+    assert!(report.passes.is_empty(), "passes dispatched: {:?}", report.passes);
+    assert_eq!(report.photons_traced, 0);
+    assert!(report.caustics.unwrap().data.iter().all(|v| *v == glam::Vec3::ZERO));
+}
+
+fn render_example() -> PathBuf {
+    // target/release/deps/gpu-* -> target/release/examples/render
+    let exe = std::env::current_exe().unwrap();
+    exe.parent().unwrap().parent().unwrap().join("examples").join("render")
+}
+
+fn cli(args: &[&str]) -> (i32, String) {
+    let out = Command::new(render_example()).args(args).output().expect("run the render example (cargo test builds it)");
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// The CLI renders, writes its three files, and compares against an EXR; bad input gives one
+/// clear line and exit status 2 with nothing written.
+#[test]
+fn cli_outputs_and_errors() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |f: &str| dir.join(f).to_string_lossy().into_owned();
+    let ring = scene("ring").to_string_lossy().into_owned();
+    let (code, err) = cli(&[&ring, "--technique", "reference", "--width", "64", "--height", "64", "--photons", "100000",
+        "--frames", "5", "--out-exr", &p("a.exr"), "--out-png", &p("a.png"), "--json", &p("a.json")]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = cli(&[&ring, "--width", "64", "--height", "64", "--photons", "100000", "--frames", "5",
+        "--json", &p("b.json"), "--compare", &p("a.exr")]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p("b.json")).unwrap()).unwrap();
+    assert!(json["adapter"].as_str().unwrap().len() > 3);
+    assert_eq!(json["passes"][0], "caustics/composite");
+    assert!(json["photons_traced"].as_u64().unwrap() == 100_000);
+    // Same seed, same photons: the comparison is exact.
+    assert_eq!(json["metrics"]["rmse"].as_f64(), Some(0.0), "{json}");
+    assert!(std::fs::metadata(p("a.png")).unwrap().len() > 100);
+
+    // A glTF without a camera and one without lights.
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(scene("ring")).unwrap()).unwrap();
+    std::fs::copy(scene("ring").with_extension("bin"), dir.join("ring.bin")).unwrap();
+    let strip = |doc: &serde_json::Value, key: &str| {
+        let mut d = doc.clone();
+        let nodes: Vec<_> = d["nodes"].as_array().unwrap().iter().filter(|n| n.get(key).is_none() && n.pointer(&format!("/extensions/{key}")).is_none()).cloned().collect();
+        d["scenes"][0]["nodes"] = serde_json::json!((0..nodes.len()).collect::<Vec<_>>());
+        d["nodes"] = serde_json::json!(nodes);
+        d
+    };
+    std::fs::write(dir.join("nocam.gltf"), strip(&doc, "camera").to_string()).unwrap();
+    std::fs::write(dir.join("nolight.gltf"), strip(&doc, "KHR_lights_punctual").to_string()).unwrap();
+    for (args, needle) in [
+        (vec![p("missing.gltf")], "not found"),
+        (vec![p("nocam.gltf")], "no camera"),
+        (vec![p("nolight.gltf")], "no lights"),
+        (vec![ring.clone(), "--technique".into(), "raytraced".into()], "unknown technique"),
+        (vec![ring.clone(), "--width".into(), "wide".into()], "non-negative integer"),
+    ] {
+        let out_exr = p("never.exr");
+        let mut a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        a.extend(["--out-exr", &out_exr]);
+        let (code, err) = cli(&a);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        let last = err.lines().filter(|l| l.starts_with("error:")).collect::<Vec<_>>();
+        assert_eq!(last.len(), 1, "{args:?}: {err}");
+        assert!(last[0].contains(needle), "{args:?}: {err}");
+        assert!(!dir.join("never.exr").exists(), "an output was written on error");
+    }
+}
