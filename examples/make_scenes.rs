@@ -3,9 +3,12 @@
 //! `cargo run --release --example make_scenes [-- OUT_DIR]`
 
 fn main() {
-    let dir = std::env::args().nth(1).unwrap_or_else(|| "assets/scenes".into());
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "assets/scenes".into());
     for scene in bevy_caustics::scenes::all() {
-        if let Err(e) = bevy_caustics::scenes::gltf::write_gltf(&scene, std::path::Path::new(&dir)) {
+        if let Err(e) = bevy_caustics::scenes::gltf::write_gltf(&scene, std::path::Path::new(&dir))
+        {
             eprintln!("error: cannot write {}: {e}", scene.name);
             std::process::exit(2);
         }

@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --example render -- SCENE.gltf --technique reference --width 256 \
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
-//!     [--photons N] [--frames N] [--seed N] [--compare REF.exr]
+//!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr]
 //! ```
 //!
 //! Errors (missing file, no camera, no lights, no adapter, bad option) print one line and
@@ -25,18 +25,30 @@ struct Outputs {
 }
 
 fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
-    let mut job = RenderJob { progress: true, ..Default::default() };
-    let mut out = Outputs { exr: None, png: None, json: None, compare: None };
+    let mut job = RenderJob {
+        progress: true,
+        ..Default::default()
+    };
+    let mut out = Outputs {
+        exr: None,
+        png: None,
+        json: None,
+        compare: None,
+    };
     let mut scene = None;
     let mut i = 0;
     let num = |v: Option<&String>, name: &str| -> Result<u64, String> {
         let v = v.ok_or_else(|| format!("{name} needs a value"))?;
-        v.parse::<u64>().map_err(|_| format!("{name} expects a non-negative integer, got '{v}'"))
+        v.parse::<u64>()
+            .map_err(|_| format!("{name} expects a non-negative integer, got '{v}'"))
     };
     while i < args.len() {
         let a = args[i].as_str();
         let v = args.get(i + 1);
-        let path = |v: Option<&String>| v.map(PathBuf::from).ok_or_else(|| format!("{a} needs a path"));
+        let path = |v: Option<&String>| {
+            v.map(PathBuf::from)
+                .ok_or_else(|| format!("{a} needs a path"))
+        };
         match a {
             "--technique" => {
                 let t = v.ok_or("--technique needs a value")?;
@@ -48,6 +60,15 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
             "--photons" => job.photons = Some(num(v, a)?),
             "--frames" => job.frames = num(v, a)?.clamp(1, 100_000) as u32,
             "--seed" => job.seed = num(v, a)?,
+            "--ev100" => {
+                let t = v.ok_or("--ev100 needs a value")?;
+                let ev = t
+                    .parse::<f32>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| format!("--ev100 expects a number, got '{t}'"))?;
+                job.ev100 = Some(ev);
+            }
             "--out-exr" => out.exr = Some(path(v)?),
             "--out-png" => out.png = Some(path(v)?),
             "--json" => out.json = Some(path(v)?),
@@ -63,11 +84,12 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--compare REF.exr]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr]")?;
     Ok((job, out))
 }
 
 fn main() -> ExitCode {
+    bevy_caustics::headless::quiet_headless_environment();
     let args: Vec<String> = std::env::args().skip(1).collect();
     match real_main(&args) {
         Ok(()) => ExitCode::SUCCESS,
@@ -81,18 +103,28 @@ fn main() -> ExitCode {
 fn real_main(args: &[String]) -> Result<(), String> {
     let (job, out) = parse(args)?;
     // Read the comparison image first: a bad --compare fails before any work.
-    let reference = out.compare.as_ref().map(CausticImage::read_exr).transpose()?;
+    let reference = out
+        .compare
+        .as_ref()
+        .map(CausticImage::read_exr)
+        .transpose()?;
     if !job.scene.is_file() {
         return Err(format!("scene file not found: {}", job.scene.display()));
     }
     find_adapter()?;
     let (w, h) = (job.width, job.height);
     let mut report = run(job)?;
-    let caustics = report.caustics.take().unwrap_or_else(|| CausticImage::new(w, h));
+    let caustics = report
+        .caustics
+        .take()
+        .unwrap_or_else(|| CausticImage::new(w, h));
     if let Some(r) = &reference {
         // Over every pixel: where the camera sees no diffuse surface both buffers are zero.
         report.metrics = Some(compare(&caustics, r, None).ok_or_else(|| {
-            format!("--compare image is {}x{}, the render is {w}x{h}", r.width, r.height)
+            format!(
+                "--compare image is {}x{}, the render is {w}x{h}",
+                r.width, r.height
+            )
         })?);
     }
     if let Some(p) = &out.exr {

@@ -10,8 +10,10 @@ use std::path::PathBuf;
 use bevy_caustics::headless::{RenderJob, find_adapter, run};
 
 fn main() {
+    bevy_caustics::headless::quiet_headless_environment();
     let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/glass_sphere.gltf");
-    let window = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
+    let window =
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
     if let Err(e) = find_adapter() {
         eprintln!("error: {e}");
         std::process::exit(2);
@@ -24,12 +26,19 @@ fn main() {
         frames: if window { 100_000 } else { 8 },
         window,
         progress: true,
+        ev100: Some(13.0),
         ..Default::default()
     };
     let (w, h) = (job.width, job.height);
     match run(job) {
         Ok(report) if !window => {
-            if let Err(e) = image::save_buffer("showcase.png", &report.frame_rgba8, w, h, image::ColorType::Rgba8) {
+            if let Err(e) = image::save_buffer(
+                "showcase.png",
+                &report.frame_rgba8,
+                w,
+                h,
+                image::ColorType::Rgba8,
+            ) {
                 eprintln!("error: cannot write showcase.png: {e}");
                 std::process::exit(2);
             }

@@ -29,8 +29,8 @@ pub mod scenes;
 
 use bevy::prelude::*;
 use bevy::render::RenderApp;
-use bevy::render::renderer::{RenderAdapter, RenderDevice};
 use bevy::render::render_resource::{DownlevelFlags, WgpuLimits as Limits};
+use bevy::render::renderer::{RenderAdapter, RenderDevice};
 
 pub use components::validate::CausticsWarnings;
 pub use components::{
@@ -42,8 +42,8 @@ pub use render::CausticsDispatchLog;
 /// Everything a user needs.
 pub mod prelude {
     pub use crate::{
-        CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin, CausticsQuality,
-        CausticsTechnique, CausticsVolume, VolumeFace,
+        CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
+        CausticsQuality, CausticsTechnique, CausticsVolume, VolumeFace,
     };
 }
 
@@ -78,7 +78,10 @@ pub fn missing_gpu_capabilities(flags: DownlevelFlags, limits: &Limits) -> Vec<S
         missing.push("DownlevelFlags::COMPUTE_SHADERS".to_string());
     }
     if limits.max_storage_buffers_per_shader_stage < 8 {
-        missing.push(format!("max_storage_buffers_per_shader_stage >= 8 (have {})", limits.max_storage_buffers_per_shader_stage));
+        missing.push(format!(
+            "max_storage_buffers_per_shader_stage >= 8 (have {})",
+            limits.max_storage_buffers_per_shader_stage
+        ));
     }
     if limits.max_storage_textures_per_shader_stage < 1 {
         missing.push("max_storage_textures_per_shader_stage >= 1 (have 0)".to_string());
@@ -94,7 +97,11 @@ impl Plugin for CausticsPlugin {
             .register_type::<CausticsVolume>()
             .configure_sets(
                 PostUpdate,
-                (CausticsSystems::Validate, CausticsSystems::Gather, CausticsSystems::Technique)
+                (
+                    CausticsSystems::Validate,
+                    CausticsSystems::Gather,
+                    CausticsSystems::Technique,
+                )
                     .chain()
                     .after(bevy::transform::TransformSystems::Propagate),
             )
@@ -107,23 +114,33 @@ impl Plugin for CausticsPlugin {
         let missing = match app.get_sub_app(RenderApp) {
             Some(render_app) => {
                 let world = render_app.world();
-                match (world.get_resource::<RenderAdapter>(), world.get_resource::<RenderDevice>()) {
-                    (Some(adapter), Some(device)) => {
-                        missing_gpu_capabilities(adapter.get_downlevel_capabilities().flags, &device.limits())
-                    }
+                match (
+                    world.get_resource::<RenderAdapter>(),
+                    world.get_resource::<RenderDevice>(),
+                ) {
+                    (Some(adapter), Some(device)) => missing_gpu_capabilities(
+                        adapter.get_downlevel_capabilities().flags,
+                        &device.limits(),
+                    ),
                     _ => vec!["a render device (the RenderPlugin is not initialised)".to_string()],
                 }
             }
             None => vec!["the RenderApp (add DefaultPlugins or RenderPlugin)".to_string()],
         };
         if !missing.is_empty() {
-            warn!("bevy_caustics disabled: the GPU lacks {}", missing.join(", "));
+            warn!(
+                "bevy_caustics disabled: the GPU lacks {}",
+                missing.join(", ")
+            );
             app.insert_resource(CausticsSupport::Unsupported(missing));
             return;
         }
         app.insert_resource(CausticsSupport::Supported);
         reference::technique::plugin(app);
-        let log = app.world().resource::<render::CausticsDispatchLog>().clone();
+        let log = app
+            .world()
+            .resource::<render::CausticsDispatchLog>()
+            .clone();
         render::build(app, log);
     }
 }

@@ -13,7 +13,10 @@ fn unit(v: (f32, f32, f32)) -> Vec3 {
 }
 
 fn cases(n: u32) -> ProptestConfig {
-    ProptestConfig { cases: n, ..ProptestConfig::default() }
+    ProptestConfig {
+        cases: n,
+        ..ProptestConfig::default()
+    }
 }
 
 // ---------------------------------------------------------------- optics: fixed extremes
@@ -87,18 +90,30 @@ fn footprint_matches_projected_pixel_quad() {
     let plane_n = Vec3::new(0.3, 0.2, 1.0).normalize();
     let plane_d = -5.0; // n . x = d
     let hit = |px: f32, py: f32| {
-        let dir = Vec3::new((px - 0.5 * w as f32) / focal.fx, -(py - 0.5 * h as f32) / focal.fy, -1.0);
+        let dir = Vec3::new(
+            (px - 0.5 * w as f32) / focal.fx,
+            -(py - 0.5 * h as f32) / focal.fy,
+            -1.0,
+        );
         dir * (plane_d / plane_n.dot(dir))
     };
     for (px, py) in [(32u32, 32u32), (0, 0), (63, 10), (5, 60), (40, 20)] {
         let (x, y) = (px as f32, py as f32);
-        let q = [hit(x, y), hit(x + 1.0, y), hit(x + 1.0, y + 1.0), hit(x, y + 1.0)];
+        let q = [
+            hit(x, y),
+            hit(x + 1.0, y),
+            hit(x + 1.0, y + 1.0),
+            hit(x, y + 1.0),
+        ];
         let exact = 0.5 * ((q[2] - q[0]).cross(q[3] - q[1])).length();
         let c = hit(x + 0.5, y + 0.5);
         let dist = c.length();
         let view = c / dist;
         let area = pixel_footprint_area(dist, -view.z, view.dot(plane_n), focal);
-        assert!((area / exact - 1.0).abs() < 2e-3, "pixel ({px},{py}): {area} vs exact {exact}");
+        assert!(
+            (area / exact - 1.0).abs() < 2e-3,
+            "pixel ({px},{py}): {area} vs exact {exact}"
+        );
     }
     // Guards.
     assert_eq!(pixel_footprint_area(0.0, 1.0, 1.0, focal), 0.0);
@@ -120,8 +135,16 @@ fn sampling_mappings() {
         let c = uniform_cone(rng.next_vec2(), 0.9);
         assert!(c.z >= 0.9 - 1e-6);
     }
-    assert!((sum / 20_000.0).length() < 0.02, "sphere samples are not centred: {sum}");
-    for n in [Vec3::Z, Vec3::NEG_Z, Vec3::X, Vec3::new(0.0, -1e-7, -1.0).normalize()] {
+    assert!(
+        (sum / 20_000.0).length() < 0.02,
+        "sphere samples are not centred: {sum}"
+    );
+    for n in [
+        Vec3::Z,
+        Vec3::NEG_Z,
+        Vec3::X,
+        Vec3::new(0.0, -1e-7, -1.0).normalize(),
+    ] {
         let (t, b) = orthonormal_basis(n);
         assert!(t.dot(n).abs() < 1e-5 && b.dot(n).abs() < 1e-5 && t.dot(b).abs() < 1e-5);
         assert!(t.is_finite() && b.is_finite());
@@ -134,10 +157,21 @@ fn sampling_mappings() {
 #[test]
 fn ray_offset_is_scale_independent() {
     for s in [1e-3f32, 1.0, 1e4] {
-        for p in [Vec3::ZERO, Vec3::splat(0.3 * s), Vec3::new(-s, 2.0 * s, 0.5 * s)] {
+        for p in [
+            Vec3::ZERO,
+            Vec3::splat(0.3 * s),
+            Vec3::new(-s, 2.0 * s, 0.5 * s),
+        ] {
             let o = offset_ray_origin(p, Vec3::Y, s);
-            assert!(o.y > p.y, "offset did not move off the surface at scale {s}");
-            assert!(o.y - p.y < 1e-3 * s, "offset too large at scale {s}: {}", o.y - p.y);
+            assert!(
+                o.y > p.y,
+                "offset did not move off the surface at scale {s}"
+            );
+            assert!(
+                o.y - p.y < 1e-3 * s,
+                "offset too large at scale {s}: {}",
+                o.y - p.y
+            );
             assert!(o.is_finite());
         }
     }
@@ -225,7 +259,11 @@ fn bvh_matches_brute_force() {
     let mut rng = Pcg32::new(11, 0);
     let mut hits = 0;
     for _ in 0..2000 {
-        let o = Vec3::new(rng.next_f32() * 4.0 - 2.0, rng.next_f32() * 3.0, rng.next_f32() * 4.0 - 2.0);
+        let o = Vec3::new(
+            rng.next_f32() * 4.0 - 2.0,
+            rng.next_f32() * 3.0,
+            rng.next_f32() * 4.0 - 2.0,
+        );
         let d = uniform_sphere(rng.next_vec2());
         let bvh = tlas.closest_hit(o, d, 0.0, f32::INFINITY, |_| false);
         // Brute force over every triangle of every instance.
@@ -233,9 +271,19 @@ fn bvh_matches_brute_force() {
         for (ii, inst) in tlas.instances.iter().enumerate() {
             let g = &inst.blas.geometry;
             for (ti, t) in g.indices.iter().enumerate() {
-                let [a, b, c] = t.map(|k| inst.world_from_local.transform_point3(g.positions[k as usize]));
-                if let Some((tt, _)) = bevy_caustics::scene::bvh::intersect_triangle(o, d, a, b - a, c - a, 0.0, f32::INFINITY)
-                    && best.is_none_or(|x| tt < x.0)
+                let [a, b, c] = t.map(|k| {
+                    inst.world_from_local
+                        .transform_point3(g.positions[k as usize])
+                });
+                if let Some((tt, _)) = bevy_caustics::scene::bvh::intersect_triangle(
+                    o,
+                    d,
+                    a,
+                    b - a,
+                    c - a,
+                    0.0,
+                    f32::INFINITY,
+                ) && best.is_none_or(|x| tt < x.0)
                 {
                     best = Some((tt, ii as u32, ti as u32));
                 }
@@ -260,7 +308,13 @@ fn degenerate_triangles_are_skipped() {
     use bevy_caustics::scene::{Blas, MeshGeometry};
     use std::sync::Arc;
     let g = MeshGeometry {
-        positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0, Vec3::Y, Vec3::splat(f32::NAN)],
+        positions: vec![
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::X * 2.0,
+            Vec3::Y,
+            Vec3::splat(f32::NAN),
+        ],
         normals: None,
         indices: vec![[0, 1, 2], [0, 0, 0], [0, 1, 3], [0, 1, 4], [0, 1, 99]],
     };
@@ -276,8 +330,16 @@ fn degenerate_triangles_are_skipped() {
 const N: u64 = 1 << 20;
 
 /// Mean irradiance over the pixels whose eye ray meets the plane `n . x = d` inside `inside`.
-fn region_mean(img: &CausticImage, cam: &TraceCamera, n: Vec3, d: f32, inside: impl Fn(Vec3) -> bool) -> (f32, usize) {
-    let CameraProjection::Perspective { fov_y } = cam.projection else { unreachable!() };
+fn region_mean(
+    img: &CausticImage,
+    cam: &TraceCamera,
+    n: Vec3,
+    d: f32,
+    inside: impl Fn(Vec3) -> bool,
+) -> (f32, usize) {
+    let CameraProjection::Perspective { fov_y } = cam.projection else {
+        unreachable!()
+    };
     let focal = PixelFocal::from_fov_y(fov_y, cam.width, cam.height);
     let eye = cam.position();
     let (mut sum, mut count) = (0.0f64, 0usize);
@@ -303,15 +365,30 @@ fn region_mean(img: &CausticImage, cam: &TraceCamera, n: Vec3, d: f32, inside: i
 fn reference_mirror_wall_closed_form() {
     let desc = scenes::mirror_wall();
     let (tlas, lights, cam) = desc.to_trace(128, 128);
-    let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: N, seed: 3, ..Default::default() }, None);
+    let out = trace(
+        &tlas,
+        &lights,
+        &cam,
+        &TraceSettings {
+            photons_per_light: N,
+            seed: 3,
+            ..Default::default()
+        },
+        None,
+    );
     assert!(out.image.all_finite());
     let a = scenes::MIRROR_WALL_INCIDENCE;
     // The reflected beam keeps E_perp * R(θ); on the wall (normal -X) it arrives at cos = sin 45.
     let r = fresnel_schlick(a.cos(), Vec3::splat(0.9)).x;
     let expect = scenes::SUN_LUX * r * a.sin();
-    let (mean, px) = region_mean(&out.image, &cam, Vec3::NEG_X, -3.0, |p| (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25);
+    let (mean, px) = region_mean(&out.image, &cam, Vec3::NEG_X, -3.0, |p| {
+        (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25
+    });
     let err = mean / expect - 1.0;
-    println!("mirror_wall: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %", err * 100.0);
+    println!(
+        "mirror_wall: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %",
+        err * 100.0
+    );
     assert!(px > 200);
     assert!(err.abs() < 0.02);
 }
@@ -320,14 +397,29 @@ fn reference_mirror_wall_closed_form() {
 fn reference_glass_slab_closed_form() {
     let desc = scenes::glass_slab();
     let (tlas, lights, cam) = desc.to_trace(128, 128);
-    let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: N, seed: 5, ..Default::default() }, None);
+    let out = trace(
+        &tlas,
+        &lights,
+        &cam,
+        &TraceSettings {
+            photons_per_light: N,
+            seed: 5,
+            ..Default::default()
+        },
+        None,
+    );
     let a = scenes::GLASS_SLAB_INCIDENCE;
     // Two interfaces plus every even number of internal reflections: T^2 / (1 - R^2).
     let r = fresnel_dielectric(a.cos(), 1.0 / 1.5);
     let expect = scenes::SUN_LUX * a.cos() * (1.0 - r) / (1.0 + r);
-    let (mean, px) = region_mean(&out.image, &cam, Vec3::Y, 0.0, |p| (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3);
+    let (mean, px) = region_mean(&out.image, &cam, Vec3::Y, 0.0, |p| {
+        (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3
+    });
     let err = mean / expect - 1.0;
-    println!("glass_slab: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %", err * 100.0);
+    println!(
+        "glass_slab: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %",
+        err * 100.0
+    );
     assert!(px > 200);
     assert!(err.abs() < 0.02);
 }
@@ -337,9 +429,23 @@ fn reference_glass_sphere_power() {
     let desc = scenes::glass_sphere();
     let (tlas, lights, cam) = desc.to_trace(128, 128);
     let t0 = std::time::Instant::now();
-    let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: N, seed: 9, ..Default::default() }, None);
+    let out = trace(
+        &tlas,
+        &lights,
+        &cam,
+        &TraceSettings {
+            photons_per_light: N,
+            seed: 9,
+            ..Default::default()
+        },
+        None,
+    );
     let secs = t0.elapsed().as_secs_f64();
-    println!("glass_sphere: {} photons in {secs:.2} s = {:.2} M photons/s", out.stats.photons_emitted, out.stats.photons_emitted as f64 / secs / 1e6);
+    println!(
+        "glass_sphere: {} photons in {secs:.2} s = {:.2} M photons/s",
+        out.stats.photons_emitted,
+        out.stats.photons_emitted as f64 / secs / 1e6
+    );
     // Power entering the ball times the two Fresnel transmittances, integrated over the disc.
     let r = scenes::SPHERE_RADIUS as f64;
     let steps = 20_000;
@@ -356,7 +462,10 @@ fn reference_glass_sphere_power() {
     expect *= scenes::SUN_LUX as f64;
     let tt = out.stats.flux_per_path.get(&(0, 2)).map_or(0.0, |v| v.y);
     let err = tt / expect - 1.0;
-    println!("glass_sphere: two-refraction power {tt:.1} lm vs closed form {expect:.1} lm, error {:.3} %", err * 100.0);
+    println!(
+        "glass_sphere: two-refraction power {tt:.1} lm vs closed form {expect:.1} lm, error {:.3} %",
+        err * 100.0
+    );
     assert!(err.abs() < 0.02);
     // Energy is never created: everything on the floor came through the ball's cross-section.
     let entering = scenes::SUN_LUX as f64 * std::f64::consts::PI * r * r;
@@ -368,11 +477,18 @@ fn reference_glass_sphere_power() {
 fn reference_is_deterministic() {
     let desc = scenes::ring();
     let (tlas, lights, cam) = desc.to_trace(64, 64);
-    let s = TraceSettings { photons_per_light: 50_000, seed: 42, ..Default::default() };
+    let s = TraceSettings {
+        photons_per_light: 50_000,
+        seed: 42,
+        ..Default::default()
+    };
     let a = trace(&tlas, &lights, &cam, &s, None);
     let b = trace(&tlas, &lights, &cam, &s, None);
     assert_eq!(a.image, b.image);
-    assert!(a.stats.photons_in_view > 1000, "the ring makes no caustic in view");
+    assert!(
+        a.stats.photons_in_view > 1000,
+        "the ring makes no caustic in view"
+    );
     let c = trace(&tlas, &lights, &cam, &TraceSettings { seed: 43, ..s }, None);
     assert_ne!(a.image, c.image);
 }
@@ -403,7 +519,16 @@ fn reference_extreme_inputs_stay_finite() {
         d.camera.translation *= s;
         let (tlas, lights, cam) = d.to_trace(32, 32);
         for photons in [0, 20_000] {
-            let out = trace(&tlas, &lights, &cam, &TraceSettings { photons_per_light: photons, ..Default::default() }, None);
+            let out = trace(
+                &tlas,
+                &lights,
+                &cam,
+                &TraceSettings {
+                    photons_per_light: photons,
+                    ..Default::default()
+                },
+                None,
+            );
             assert!(out.image.all_finite(), "{name}: non-finite pixel");
             assert!(out.stats.flux_deposited.is_finite(), "{name}");
             if photons == 0 {
@@ -412,7 +537,10 @@ fn reference_extreme_inputs_stay_finite() {
             if name == "ior 1" && photons > 0 {
                 // IOR 1: no interface. Light passes unbent and unreflected (only transmitted
                 // light, no focusing): floor irradiance equals the direct beam.
-                assert!(out.stats.flux_per_path.keys().all(|(r, _)| *r == 0), "{name}: reflections at IOR 1");
+                assert!(
+                    out.stats.flux_per_path.keys().all(|(r, _)| *r == 0),
+                    "{name}: reflections at IOR 1"
+                );
             }
         }
     }
@@ -463,16 +591,26 @@ fn exr_round_trip() {
 fn invalid_component_values_are_clamped() {
     use bevy_caustics::components::validate::*;
     use bevy_caustics::{CausticLight, CausticMaterial, CausticsVolume};
-    let mut v = CausticsVolume { slabs: 0, size: Vec3::new(0.0, -1.0, f32::NAN), photons: -5, ..Default::default() };
+    let mut v = CausticsVolume {
+        slabs: 0,
+        size: Vec3::new(0.0, -1.0, f32::NAN),
+        photons: -5,
+        ..Default::default()
+    };
     let fixes = sanitize_volume(&mut v);
     let fields: Vec<_> = fixes.iter().map(|f| f.0).collect();
     assert_eq!(fields, ["size", "slabs", "photons"]);
     assert_eq!((v.slabs, v.photons, v.size), (1, 0, Vec3::splat(1e-3)));
-    assert!(sanitize_volume(&mut v).is_empty(), "a clamped value must be valid (one warning only)");
+    assert!(
+        sanitize_volume(&mut v).is_empty(),
+        "a clamped value must be valid (one warning only)"
+    );
     let mut m = CausticMaterial::glass(0.5);
     assert_eq!(sanitize_material(&mut m).len(), 1);
     assert_eq!(m, CausticMaterial::glass(1.0));
-    let mut l = CausticLight { intensity_scale: f32::NAN };
+    let mut l = CausticLight {
+        intensity_scale: f32::NAN,
+    };
     assert_eq!(sanitize_light(&mut l).len(), 1);
     assert_eq!(l.intensity_scale, 0.0);
     assert!(sanitize_light(&mut CausticLight::default()).is_empty());
@@ -489,7 +627,10 @@ fn scene_files_are_current() {
             let f = format!("{}.{ext}", s.name);
             let new = std::fs::read(dir.join(&f)).unwrap();
             let old = std::fs::read(repo.join(&f)).unwrap_or_default();
-            assert!(new == old, "assets/scenes/{f} is stale: run cargo run --release --example make_scenes");
+            assert!(
+                new == old,
+                "assets/scenes/{f} is stale: run cargo run --release --example make_scenes"
+            );
         }
     }
 }
@@ -502,4 +643,101 @@ fn rng_streams_differ() {
     assert!(same < 4);
     let v: Vec2 = Pcg32::new(5, 5).next_vec2();
     assert!((0.0..1.0).contains(&v.x) && (0.0..1.0).contains(&v.y));
+}
+
+// ---------------------------------------------------------------- ECS gathering (no GPU)
+
+/// The scene is gathered on change only, a BLAS is built once per mesh asset, and nothing is
+/// gathered without a `CausticLight`.
+#[test]
+fn scene_gathering_rebuilds_only_what_changed() {
+    use bevy::prelude::*;
+    use bevy_caustics::scene::CausticsScene;
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins,
+        AssetPlugin::default(),
+        bevy::transform::TransformPlugin,
+    ))
+    .init_asset::<Mesh>()
+    .init_asset::<StandardMaterial>()
+    .add_plugins(bevy_caustics::CausticsPlugin);
+    app.finish();
+    app.cleanup();
+    let (sphere, plane, glass, floor) = {
+        let w = app.world_mut();
+        let mut meshes = w.resource_mut::<Assets<Mesh>>();
+        let sphere = meshes.add(Sphere::new(0.5).mesh().uv(32, 16));
+        let plane = meshes.add(Plane3d::default().mesh().size(10.0, 10.0));
+        let mut mats = w.resource_mut::<Assets<StandardMaterial>>();
+        let glass = mats.add(StandardMaterial {
+            specular_transmission: 1.0,
+            ior: 1.5,
+            ..default()
+        });
+        let floor = mats.add(StandardMaterial::default());
+        (sphere, plane, glass, floor)
+    };
+    let w = app.world_mut();
+    let ball = w
+        .spawn((
+            Mesh3d(sphere.clone()),
+            MeshMaterial3d(glass.clone()),
+            Transform::from_xyz(0.0, 1.0, 0.0),
+        ))
+        .id();
+    w.spawn((
+        Mesh3d(sphere.clone()),
+        MeshMaterial3d(glass),
+        Transform::from_xyz(2.0, 1.0, 0.0),
+    ));
+    w.spawn((Mesh3d(plane), MeshMaterial3d(floor), Transform::default()));
+    app.update();
+    let s = app.world().resource::<CausticsScene>();
+    assert_eq!(
+        (s.generation, s.casters, s.blas_builds),
+        (0, 0, 0),
+        "gathered without a CausticLight"
+    );
+
+    let light = app
+        .world_mut()
+        .spawn((
+            DirectionalLight::default(),
+            bevy_caustics::CausticLight::default(),
+        ))
+        .id();
+    app.update();
+    let s = app.world().resource::<CausticsScene>().clone();
+    assert_eq!((s.casters, s.receivers, s.lights.len()), (2, 1, 1));
+    assert!(s.is_active());
+    assert_eq!(
+        s.blas_builds, 2,
+        "one BLAS per mesh asset, shared by instances"
+    );
+    let generation = s.generation;
+
+    app.update();
+    assert_eq!(
+        app.world().resource::<CausticsScene>().generation,
+        generation,
+        "rebuilt without a change"
+    );
+
+    app.world_mut()
+        .entity_mut(ball)
+        .insert(Transform::from_xyz(0.0, 2.0, 0.0));
+    app.update();
+    let s = app.world().resource::<CausticsScene>().clone();
+    assert_eq!(s.generation, generation + 1);
+    assert_eq!(
+        s.blas_builds, 2,
+        "moving an instance must not rebuild its BLAS"
+    );
+
+    app.world_mut()
+        .entity_mut(light)
+        .remove::<bevy_caustics::CausticLight>();
+    app.update();
+    assert!(!app.world().resource::<CausticsScene>().is_active());
 }

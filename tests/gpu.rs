@@ -11,7 +11,9 @@ use bevy_caustics::headless::{RenderJob, find_adapter, run};
 static GPU: Mutex<()> = Mutex::new(());
 
 fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes").join(format!("{name}.gltf"))
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(format!("{name}.gltf"))
 }
 
 fn require_gpu() -> bool {
@@ -53,8 +55,28 @@ fn composite_adds_albedo_over_pi_times_irradiance() {
     assert_eq!(report.linear_with.len(), 128 * 128);
     assert_eq!(report.linear_without.len(), 128 * 128);
     let albedo = 0.8f32; // the floor of glass_sphere
+    // Pixels where the eye sees the glass first show the screen through refraction (forward
+    // transmissive pass), caustics included: the composite's own contribution is checked on the
+    // pixels that see the floor directly.
+    let (tlas, _, cam) = bevy_caustics::scenes::glass_sphere().to_trace(128, 128);
+    let focal = bevy_caustics::optics::PixelFocal::from_fov_y(45f32.to_radians(), 128, 128);
+    let sees_floor = |i: usize| {
+        let (x, y) = ((i % 128) as f32 + 0.5, (i / 128) as f32 + 0.5);
+        let local = glam::Vec3::new((x - 64.0) / focal.fx, -(y - 64.0) / focal.fy, -1.0);
+        let d = cam.world_from_view.transform_vector3(local).normalize();
+        tlas.closest_hit(cam.position(), d, 0.0, f32::INFINITY, |_| false)
+            .is_some_and(|h| !tlas.instances[h.instance as usize].surface.is_specular())
+    };
     let (mut checked, mut worst) = (0, 0.0f32);
-    for (i, (w, wo)) in report.linear_with.iter().zip(&report.linear_without).enumerate() {
+    for (i, (w, wo)) in report
+        .linear_with
+        .iter()
+        .zip(&report.linear_without)
+        .enumerate()
+    {
+        if !sees_floor(i) {
+            continue;
+        }
         let expect = albedo / std::f32::consts::PI * e.data[i] * report.exposure;
         for c in 0..3 {
             let got = w[c] - wo[c];
@@ -62,14 +84,25 @@ fn composite_adds_albedo_over_pi_times_irradiance() {
             // f16 target: about 1e-3 relative precision on each of the two frames.
             let tol = 4e-3 * w[c].abs().max(wo[c].abs()) + 1e-4;
             let err = (got - expect[c]).abs();
-            assert!(err <= tol.max(0.01 * expect[c]), "pixel {i} channel {c}: got {got}, expected {}", expect[c]);
-            worst = worst.max(err / expect[c].max(1e-3));
+            assert!(
+                err <= tol.max(0.01 * expect[c]),
+                "pixel {i} channel {c}: got {got}, expected {}",
+                expect[c]
+            );
+            // Relative error where the caustic is a sizeable part of the pixel (elsewhere the
+            // f16 rounding of the lit floor dominates and is covered by `tol`).
+            if expect[c] > 0.2 * wo[c].abs() && expect[c] > 0.0 {
+                worst = worst.max(err / expect[c]);
+            }
         }
         if e.data[i].x > 0.0 {
             checked += 1;
         }
     }
-    println!("composite: {checked} caustic pixels checked, worst relative error {worst:.2e}, exposure {}", report.exposure);
+    println!(
+        "composite: {checked} caustic pixels checked, worst relative error {worst:.2e}, exposure {}",
+        report.exposure
+    );
     assert!(checked > 300, "too few caustic pixels: {checked}");
     println!("composite pass: {:?} ({})", report.pass_ms, report.timing);
 }
@@ -81,21 +114,50 @@ fn empty_scene_dispatches_nothing() {
     if !require_gpu() {
         return;
     }
-    let report = run(RenderJob { scene: scene("empty"), width: 64, height: 64, frames: 6, ..Default::default() }).expect("render");
-    assert!(report.passes.is_empty(), "passes dispatched: {:?}", report.passes);
+    let report = run(RenderJob {
+        scene: scene("empty"),
+        width: 64,
+        height: 64,
+        frames: 6,
+        ..Default::default()
+    })
+    .expect("render");
+    assert!(
+        report.passes.is_empty(),
+        "passes dispatched: {:?}",
+        report.passes
+    );
     assert_eq!(report.photons_traced, 0);
-    assert!(report.caustics.unwrap().data.iter().all(|v| *v == glam::Vec3::ZERO));
+    assert!(
+        report
+            .caustics
+            .unwrap()
+            .data
+            .iter()
+            .all(|v| *v == glam::Vec3::ZERO)
+    );
 }
 
 fn render_example() -> PathBuf {
     // target/release/deps/gpu-* -> target/release/examples/render
     let exe = std::env::current_exe().unwrap();
-    exe.parent().unwrap().parent().unwrap().join("examples").join("render")
+    exe.parent()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .join("examples")
+        .join("render")
 }
 
 fn cli(args: &[&str]) -> (i32, String) {
-    let out = Command::new(render_example()).args(args).output().expect("run the render example (cargo test builds it)");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+    let out = Command::new(render_example())
+        .args(args)
+        .output()
+        .expect("run the render example (cargo test builds it)");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 /// The CLI renders, writes its three files, and compares against an EXR; bad input gives one
@@ -110,13 +172,44 @@ fn cli_outputs_and_errors() {
     std::fs::create_dir_all(&dir).unwrap();
     let p = |f: &str| dir.join(f).to_string_lossy().into_owned();
     let ring = scene("ring").to_string_lossy().into_owned();
-    let (code, err) = cli(&[&ring, "--technique", "reference", "--width", "64", "--height", "64", "--photons", "100000",
-        "--frames", "5", "--out-exr", &p("a.exr"), "--out-png", &p("a.png"), "--json", &p("a.json")]);
+    let (code, err) = cli(&[
+        &ring,
+        "--technique",
+        "reference",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--photons",
+        "100000",
+        "--frames",
+        "5",
+        "--out-exr",
+        &p("a.exr"),
+        "--out-png",
+        &p("a.png"),
+        "--json",
+        &p("a.json"),
+    ]);
     assert_eq!(code, 0, "{err}");
-    let (code, err) = cli(&[&ring, "--width", "64", "--height", "64", "--photons", "100000", "--frames", "5",
-        "--json", &p("b.json"), "--compare", &p("a.exr")]);
+    let (code, err) = cli(&[
+        &ring,
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--photons",
+        "100000",
+        "--frames",
+        "5",
+        "--json",
+        &p("b.json"),
+        "--compare",
+        &p("a.exr"),
+    ]);
     assert_eq!(code, 0, "{err}");
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p("b.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("b.json")).unwrap()).unwrap();
     assert!(json["adapter"].as_str().unwrap().len() > 3);
     assert_eq!(json["passes"][0], "caustics/composite");
     assert!(json["photons_traced"].as_u64().unwrap() == 100_000);
@@ -125,32 +218,133 @@ fn cli_outputs_and_errors() {
     assert!(std::fs::metadata(p("a.png")).unwrap().len() > 100);
 
     // A glTF without a camera and one without lights.
-    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(scene("ring")).unwrap()).unwrap();
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(scene("ring")).unwrap()).unwrap();
     std::fs::copy(scene("ring").with_extension("bin"), dir.join("ring.bin")).unwrap();
     let strip = |doc: &serde_json::Value, key: &str| {
         let mut d = doc.clone();
-        let nodes: Vec<_> = d["nodes"].as_array().unwrap().iter().filter(|n| n.get(key).is_none() && n.pointer(&format!("/extensions/{key}")).is_none()).cloned().collect();
+        let nodes: Vec<_> = d["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|n| n.get(key).is_none() && n.pointer(&format!("/extensions/{key}")).is_none())
+            .cloned()
+            .collect();
         d["scenes"][0]["nodes"] = serde_json::json!((0..nodes.len()).collect::<Vec<_>>());
         d["nodes"] = serde_json::json!(nodes);
         d
     };
     std::fs::write(dir.join("nocam.gltf"), strip(&doc, "camera").to_string()).unwrap();
-    std::fs::write(dir.join("nolight.gltf"), strip(&doc, "KHR_lights_punctual").to_string()).unwrap();
+    std::fs::write(
+        dir.join("nolight.gltf"),
+        strip(&doc, "KHR_lights_punctual").to_string(),
+    )
+    .unwrap();
     for (args, needle) in [
         (vec![p("missing.gltf")], "not found"),
         (vec![p("nocam.gltf")], "no camera"),
         (vec![p("nolight.gltf")], "no lights"),
-        (vec![ring.clone(), "--technique".into(), "raytraced".into()], "unknown technique"),
-        (vec![ring.clone(), "--width".into(), "wide".into()], "non-negative integer"),
+        (
+            vec![ring.clone(), "--technique".into(), "raytraced".into()],
+            "unknown technique",
+        ),
+        (
+            vec![ring.clone(), "--width".into(), "wide".into()],
+            "non-negative integer",
+        ),
     ] {
         let out_exr = p("never.exr");
         let mut a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
         a.extend(["--out-exr", &out_exr]);
         let (code, err) = cli(&a);
         assert_eq!(code, 2, "{args:?}: {err}");
-        let last = err.lines().filter(|l| l.starts_with("error:")).collect::<Vec<_>>();
+        let last = err
+            .lines()
+            .filter(|l| l.starts_with("error:"))
+            .collect::<Vec<_>>();
         assert_eq!(last.len(), 1, "{args:?}: {err}");
         assert!(last[0].contains(needle), "{args:?}: {err}");
-        assert!(!dir.join("never.exr").exists(), "an output was written on error");
+        assert!(
+            !dir.join("never.exr").exists(),
+            "an output was written on error"
+        );
     }
+}
+
+/// Invalid component values: each clamped case logs exactly one warning naming the entity and
+/// the field, and the scene still renders.
+#[test]
+fn bad_input_warns_once_and_renders() {
+    use bevy::prelude::*;
+    use bevy_caustics::{CausticLight, CausticMaterial, CausticsVolume};
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    fn hook(world: &mut World) {
+        world.spawn((
+            Name::new("bad_volume"),
+            CausticsVolume {
+                slabs: 0,
+                size: Vec3::ZERO,
+                photons: -5,
+                ..default()
+            },
+        ));
+        let ball = world
+            .query::<(Entity, &Name)>()
+            .iter(world)
+            .find(|(_, n)| n.as_str() == "ball")
+            .map(|(e, _)| e)
+            .expect("ball");
+        world.entity_mut(ball).insert(CausticMaterial::glass(0.5));
+        let light = world
+            .query_filtered::<Entity, With<DirectionalLight>>()
+            .single(world)
+            .expect("sun");
+        world.entity_mut(light).insert(CausticLight {
+            intensity_scale: -3.0,
+        });
+    }
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        width: 64,
+        height: 64,
+        photons: Some(20_000),
+        frames: 10,
+        hook: Some(hook),
+        ..Default::default()
+    })
+    .expect("render");
+    for w in &report.warnings {
+        println!("{w}");
+    }
+    let expect = [
+        ("CausticsVolume.size", "bad_volume"),
+        ("CausticsVolume.slabs", "bad_volume"),
+        ("CausticsVolume.photons", "bad_volume"),
+        ("CausticMaterial.ior", "ball"),
+        ("CausticLight.intensity_scale", "sun"),
+    ];
+    assert_eq!(
+        report.warnings.len(),
+        expect.len(),
+        "{:#?}",
+        report.warnings
+    );
+    for (field, who) in expect {
+        assert_eq!(
+            report
+                .warnings
+                .iter()
+                .filter(|w| w.contains(field) && w.contains(who))
+                .count(),
+            1,
+            "{field} on {who}"
+        );
+    }
+    // It rendered: the frame came back and the buffer is finite (the clamped light scale 0
+    // leaves it black).
+    assert_eq!(report.frame_rgba8.len(), 64 * 64 * 4);
+    assert!(report.caustics.unwrap().all_finite());
 }

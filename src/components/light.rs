@@ -15,6 +15,8 @@ pub struct CausticLight {
 
 impl Default for CausticLight {
     fn default() -> Self {
-        Self { intensity_scale: 1.0 }
+        Self {
+            intensity_scale: 1.0,
+        }
     }
 }

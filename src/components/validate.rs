@@ -16,7 +16,14 @@ pub struct CausticsWarnings {
 
 impl CausticsWarnings {
     /// Log `detail` about `component.field` of `entity` and record it.
-    pub fn report(&mut self, entity: Entity, name: Option<&Name>, component: &str, field: &str, detail: &str) {
+    pub fn report(
+        &mut self,
+        entity: Entity,
+        name: Option<&Name>,
+        component: &str,
+        field: &str,
+        detail: &str,
+    ) {
         let who = match name {
             Some(n) => format!("entity {entity} ({n})"),
             None => format!("entity {entity}"),
@@ -35,37 +42,69 @@ pub fn sanitize_volume(v: &mut CausticsVolume) -> Vec<Fix> {
     let mut fixes = Vec::new();
     let size = Vec3::new(fix_size(v.size.x), fix_size(v.size.y), fix_size(v.size.z));
     if size != v.size {
-        fixes.push(("size", format!("{} has a zero, negative or non-finite extent; clamped to {size}", v.size)));
+        fixes.push((
+            "size",
+            format!(
+                "{} has a zero, negative or non-finite extent; clamped to {size}",
+                v.size
+            ),
+        ));
         v.size = size;
     }
     let slabs = v.slabs.clamp(1, 64);
     if slabs != v.slabs {
-        fixes.push(("slabs", format!("{} is outside [1, 64]; clamped to {slabs}", v.slabs)));
+        fixes.push((
+            "slabs",
+            format!("{} is outside [1, 64]; clamped to {slabs}", v.slabs),
+        ));
         v.slabs = slabs;
     }
     let photons = v.photons.clamp(0, 1 << 24);
     if photons != v.photons {
-        fixes.push(("photons", format!("{} is outside [0, 16777216]; clamped to {photons}", v.photons)));
+        fixes.push((
+            "photons",
+            format!(
+                "{} is outside [0, 16777216]; clamped to {photons}",
+                v.photons
+            ),
+        ));
         v.photons = photons;
     }
     let res = v.projector_resolution.clamp(16, 4096);
     if res != v.projector_resolution {
-        fixes.push(("projector_resolution", format!("{} is outside [16, 4096]; clamped to {res}", v.projector_resolution)));
+        fixes.push((
+            "projector_resolution",
+            format!(
+                "{} is outside [16, 4096]; clamped to {res}",
+                v.projector_resolution
+            ),
+        ));
         v.projector_resolution = res;
     }
     fixes
 }
 
 fn fix_size(x: f32) -> f32 {
-    if x.is_finite() && x > 0.0 { x.max(1e-3) } else { 1e-3 }
+    if x.is_finite() && x > 0.0 {
+        x.max(1e-3)
+    } else {
+        1e-3
+    }
 }
 
 /// Clamp a light's fields into range; returns what was fixed.
 pub fn sanitize_light(l: &mut CausticLight) -> Vec<Fix> {
     let mut fixes = Vec::new();
-    let s = if l.intensity_scale.is_finite() { l.intensity_scale.clamp(0.0, 1000.0) } else { 0.0 };
+    let s = if l.intensity_scale.is_finite() {
+        l.intensity_scale.clamp(0.0, 1000.0)
+    } else {
+        0.0
+    };
     if s != l.intensity_scale {
-        fixes.push(("intensity_scale", format!("{} is outside [0, 1000]; clamped to {s}", l.intensity_scale)));
+        fixes.push((
+            "intensity_scale",
+            format!("{} is outside [0, 1000]; clamped to {s}", l.intensity_scale),
+        ));
         l.intensity_scale = s;
     }
     fixes
@@ -74,8 +113,17 @@ pub fn sanitize_light(l: &mut CausticLight) -> Vec<Fix> {
 /// Clamp a material override into range; returns what was fixed.
 pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
     let mut fixes = Vec::new();
-    if let CausticMaterial::Dielectric { ior, attenuation_distance, .. } = m {
-        let i = if ior.is_finite() { ior.clamp(1.0, 4.0) } else { 1.0 };
+    if let CausticMaterial::Dielectric {
+        ior,
+        attenuation_distance,
+        ..
+    } = m
+    {
+        let i = if ior.is_finite() {
+            ior.clamp(1.0, 4.0)
+        } else {
+            1.0
+        };
         if i != *ior {
             fixes.push(("ior", format!("{ior} is outside [1, 4]; clamped to {i}")));
             *ior = i;
@@ -86,7 +134,10 @@ pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
             *attenuation_distance
         };
         if d != *attenuation_distance {
-            fixes.push(("attenuation_distance", format!("{attenuation_distance} is not > 0; set to infinity (clear)")));
+            fixes.push((
+                "attenuation_distance",
+                format!("{attenuation_distance} is not > 0; set to infinity (clear)"),
+            ));
             *attenuation_distance = d;
         }
     }

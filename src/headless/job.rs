@@ -20,9 +20,13 @@ use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
 use serde::Serialize;
 
-use crate::reference::{CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceStatus};
+use crate::reference::{
+    CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceProgress, ReferenceStatus,
+};
 use crate::render::composite::COMPOSITE_PASS;
-use crate::{CausticLight, Caustics, CausticsDispatchLog, CausticsPlugin, CausticsQuality, CausticsTechnique};
+use crate::{
+    CausticLight, Caustics, CausticsDispatchLog, CausticsPlugin, CausticsQuality, CausticsTechnique,
+};
 
 /// One render.
 #[derive(Clone, Debug)]
@@ -48,6 +52,12 @@ pub struct RenderJob {
     pub linear: bool,
     /// Print progress to stderr.
     pub progress: bool,
+    /// Camera exposure as EV100 (None: Bevy's default, `Exposure::BLENDER`, EV100 9.7). Sunlit
+    /// scenes of 10 000 lux look right around 13.
+    pub ev100: Option<f32>,
+    /// Called once on the world right after the scene spawned and the camera was added: a
+    /// hook to add or change entities (tests use it to feed invalid component values).
+    pub hook: Option<fn(&mut World)>,
 }
 
 impl Default for RenderJob {
@@ -63,6 +73,8 @@ impl Default for RenderJob {
             window: false,
             linear: false,
             progress: false,
+            ev100: None,
+            hook: None,
         }
     }
 }
@@ -151,19 +163,41 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     if !job.scene.is_file() {
         return Err(format!("scene file not found: {}", job.scene.display()));
     }
-    let ext = job.scene.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = job
+        .scene
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     if ext != "gltf" && ext != "glb" {
-        return Err(format!("not a glTF file (.gltf or .glb): {}", job.scene.display()));
+        return Err(format!(
+            "not a glTF file (.gltf or .glb): {}",
+            job.scene.display()
+        ));
     }
     if job.width == 0 || job.height == 0 || job.width > 8192 || job.height > 8192 {
-        return Err(format!("image size {}x{} is outside 1..=8192", job.width, job.height));
+        return Err(format!(
+            "image size {}x{} is outside 1..=8192",
+            job.width, job.height
+        ));
     }
-    let dir = job.scene.parent().map(|p| p.to_path_buf()).unwrap_or_default();
-    let dir = std::fs::canonicalize(&dir).map_err(|e| format!("cannot open {}: {e}", dir.display()))?;
+    let dir = job
+        .scene
+        .parent()
+        .map(|p| p.to_path_buf())
+        .unwrap_or_default();
+    let dir =
+        std::fs::canonicalize(&dir).map_err(|e| format!("cannot open {}: {e}", dir.display()))?;
     let shared = Shared::default();
     let mut app = App::new();
-    let asset = AssetPlugin { file_path: dir.to_string_lossy().into_owned(), ..default() };
-    let render = RenderPlugin { synchronous_pipeline_compilation: true, ..default() };
+    let asset = AssetPlugin {
+        file_path: dir.to_string_lossy().into_owned(),
+        ..default()
+    };
+    let render = RenderPlugin {
+        synchronous_pipeline_compilation: true,
+        ..default()
+    };
     if job.window {
         app.add_plugins(DefaultPlugins.set(asset).set(render));
     } else {
@@ -171,10 +205,16 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
             DefaultPlugins
                 .set(asset)
                 .set(render)
-                .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
+                .set(WindowPlugin {
+                    primary_window: None,
+                    exit_condition: ExitCondition::DontExit,
+                    ..default()
+                })
                 .disable::<WinitPlugin>(),
         )
-        .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(1.0 / 240.0)));
+        .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(
+            1.0 / 240.0,
+        )));
     }
     app.add_plugins((RenderDiagnosticsPlugin, CausticsPlugin))
         .insert_resource(DefaultOpaqueRendererMethod::deferred())
@@ -192,7 +232,10 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         });
     }
     app.run();
-    let mut o = shared.0.lock().map_err(|_| "internal error: poisoned state".to_string())?;
+    let mut o = shared
+        .0
+        .lock()
+        .map_err(|_| "internal error: poisoned state".to_string())?;
     if let Some(e) = o.error.take() {
         return Err(e);
     }
@@ -206,38 +249,91 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     Ok(std::mem::take(&mut o.report))
 }
 
-fn start(mut commands: Commands, job: Res<Job>, assets: Res<AssetServer>, mut images: ResMut<Assets<Image>>) {
-    let name = job.0.scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+fn start(
+    mut commands: Commands,
+    job: Res<Job>,
+    assets: Res<AssetServer>,
+    mut images: ResMut<Assets<Image>>,
+) {
+    let name = job
+        .0
+        .scene
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let scene = assets.load(name.clone());
-    commands.spawn(WorldAssetRoot(assets.load(GltfAssetLabel::Scene(0).from_asset(name))));
-    let format = if job.0.linear { TextureFormat::Rgba16Float } else { TextureFormat::Rgba8UnormSrgb };
+    commands.spawn(WorldAssetRoot(
+        assets.load(GltfAssetLabel::Scene(0).from_asset(name)),
+    ));
+    let format = if job.0.linear {
+        TextureFormat::Rgba16Float
+    } else {
+        TextureFormat::Rgba8UnormSrgb
+    };
     let mut target_image = |format| {
         let mut image = Image::new_fill(
-            Extent3d { width: job.0.width, height: job.0.height, depth_or_array_layers: 1 },
+            Extent3d {
+                width: job.0.width,
+                height: job.0.height,
+                depth_or_array_layers: 1,
+            },
             TextureDimension::D2,
             &[0u8; 8][..format_bytes(format)],
             format,
             RenderAssetUsages::default(),
         );
-        image.texture_descriptor.usage =
-            TextureUsages::TEXTURE_BINDING | TextureUsages::COPY_DST | TextureUsages::COPY_SRC | TextureUsages::RENDER_ATTACHMENT;
+        image.texture_descriptor.usage = TextureUsages::TEXTURE_BINDING
+            | TextureUsages::COPY_DST
+            | TextureUsages::COPY_SRC
+            | TextureUsages::RENDER_ATTACHMENT;
         images.add(image)
     };
     let target = target_image(format);
     let twin = job.0.linear.then(|| target_image(format));
-    commands.insert_resource(Handles { scene, target, twin });
+    commands.insert_resource(Handles {
+        scene,
+        target,
+        twin,
+    });
 }
 
 fn format_bytes(f: TextureFormat) -> usize {
-    if f == TextureFormat::Rgba16Float { 8 } else { 4 }
+    if f == TextureFormat::Rgba16Float {
+        8
+    } else {
+        4
+    }
 }
 
-/// Every light of the loaded scene casts caustics.
+/// Every light of the loaded scene casts caustics, with shadow maps: the shadow of a caster
+/// removes the light it redirects from direct lighting, and the caustic adds it back where it
+/// lands, so the frame does not count that light twice.
+#[allow(clippy::type_complexity)]
 fn mark_lights(
     mut commands: Commands,
-    lights: Query<Entity, (Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>, Without<CausticLight>)>,
+    mut lights: Query<
+        (
+            Entity,
+            Option<&mut DirectionalLight>,
+            Option<&mut PointLight>,
+            Option<&mut SpotLight>,
+        ),
+        (
+            Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>,
+            Without<CausticLight>,
+        ),
+    >,
 ) {
-    for e in &lights {
+    for (e, d, p, s) in &mut lights {
+        if let Some(mut d) = d {
+            d.shadow_maps_enabled = true;
+        }
+        if let Some(mut p) = p {
+            p.shadow_maps_enabled = true;
+        }
+        if let Some(mut s) = s {
+            s.shadow_maps_enabled = true;
+        }
         commands.entity(e).insert(CausticLight::default());
     }
 }
@@ -250,9 +346,19 @@ fn drive(
     mut phase: ResMut<Phase>,
     handles: Res<Handles>,
     assets: Res<AssetServer>,
-    mut cameras: Query<(Entity, &mut Camera, &GlobalTransform, &Projection), (Without<MainCamera>, Without<TwinCamera>)>,
+    mut cameras: Query<
+        (Entity, &mut Camera, &GlobalTransform, &Projection),
+        (Without<MainCamera>, Without<TwinCamera>),
+    >,
     lights: Query<(), Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>>,
-    main: Query<(Option<&ReferenceStatus>, Option<&CausticsReferenceImage>), With<MainCamera>>,
+    main: Query<
+        (
+            Option<&ReferenceStatus>,
+            Option<&CausticsReferenceImage>,
+            Option<&ReferenceProgress>,
+        ),
+        With<MainCamera>,
+    >,
     diagnostics: Res<DiagnosticsStore>,
     log: Res<CausticsDispatchLog>,
     warnings: Res<crate::CausticsWarnings>,
@@ -268,12 +374,20 @@ fn drive(
     match *phase {
         Phase::Loading => {
             match assets.load_state(&handles.scene) {
-                LoadState::Failed(e) => return fail(format!("cannot load {}: {e}", job.0.scene.display()), &mut exit),
+                LoadState::Failed(e) => {
+                    return fail(
+                        format!("cannot load {}: {e}", job.0.scene.display()),
+                        &mut exit,
+                    );
+                }
                 LoadState::Loaded => *phase = Phase::Spawned(0),
                 _ => {}
             }
             if frames.0 > 3000 {
-                fail(format!("timed out loading {}", job.0.scene.display()), &mut exit);
+                fail(
+                    format!("timed out loading {}", job.0.scene.display()),
+                    &mut exit,
+                );
             }
         }
         Phase::Spawned(n) => {
@@ -283,10 +397,19 @@ fn drive(
                 return;
             }
             let Some((cam_entity, mut cam, gt, projection)) = cameras.iter_mut().next() else {
-                return fail(format!("{} has no camera", job.0.scene.display()), &mut exit);
+                return fail(
+                    format!("{} has no camera", job.0.scene.display()),
+                    &mut exit,
+                );
             };
             if lights.is_empty() {
-                return fail(format!("{} has no lights (KHR_lights_punctual)", job.0.scene.display()), &mut exit);
+                return fail(
+                    format!(
+                        "{} has no lights (KHR_lights_punctual)",
+                        job.0.scene.display()
+                    ),
+                    &mut exit,
+                );
             }
             cam.is_active = false;
             let _ = cam_entity;
@@ -296,21 +419,37 @@ fn drive(
             }
             let caustics = Caustics {
                 technique: job.0.technique,
-                quality: job.0.photons.map_or(CausticsQuality::Medium, |photons| CausticsQuality::Custom { photons }),
+                quality: job.0.photons.map_or(CausticsQuality::Medium, |photons| {
+                    CausticsQuality::Custom { photons }
+                }),
                 seed: job.0.seed,
                 ..default()
             };
-            let tonemapping = if job.0.linear { Tonemapping::None } else { Tonemapping::default() };
+            let exposure = job
+                .0
+                .ev100
+                .map_or_else(bevy::camera::Exposure::default, |ev100| {
+                    bevy::camera::Exposure { ev100 }
+                });
+            let tonemapping = if job.0.linear {
+                Tonemapping::None
+            } else {
+                Tonemapping::default()
+            };
             let transform = gt.compute_transform();
             let mut main = commands.spawn((
                 MainCamera,
                 Camera3d::default(),
-                Camera { order: 1, ..default() },
+                Camera {
+                    order: 1,
+                    ..default()
+                },
                 Hdr,
                 Msaa::Off,
                 projection.clone(),
                 transform,
                 tonemapping,
+                exposure,
                 caustics,
             ));
             if !job.0.window {
@@ -320,7 +459,10 @@ fn drive(
                 commands.spawn((
                     TwinCamera,
                     Camera3d::default(),
-                    Camera { order: 2, ..default() },
+                    Camera {
+                        order: 2,
+                        ..default()
+                    },
                     RenderTarget::Image(twin.clone().into()),
                     Hdr,
                     Msaa::Off,
@@ -329,20 +471,33 @@ fn drive(
                     projection,
                     transform,
                     tonemapping,
+                    exposure,
                 ));
+            }
+            if let Some(hook) = job.0.hook {
+                commands.queue(move |world: &mut World| hook(world));
             }
             *phase = Phase::Tracing;
         }
         Phase::Tracing => {
-            let Ok((status, _)) = main.single() else { return };
+            let Ok((status, _, progress)) = main.single() else {
+                return;
+            };
             match status {
                 Some(ReferenceStatus::Ready) | Some(ReferenceStatus::Inactive) => {
+                    if job.0.progress && progress.is_some() {
+                        eprintln!("bevy_caustics: reference photons traced: 100%");
+                    }
                     log.take();
                     *phase = Phase::Measuring(0);
                 }
                 _ => {
-                    if job.0.progress && frames.0 % 120 == 0 {
-                        eprintln!("bevy_caustics: tracing reference photons...");
+                    if let Some(p) = progress.filter(|_| job.0.progress && frames.0 % 60 == 0) {
+                        eprintln!(
+                            "bevy_caustics: reference photons traced: {:.0}% of {}",
+                            p.fraction() * 100.0,
+                            p.total
+                        );
                     }
                 }
             }
@@ -355,7 +510,10 @@ fn drive(
                     for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
                         let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
                         if let Some(v) = diagnostics.get(&path).and_then(|d| d.value()) {
-                            o.pass_samples.entry(format!("{pass}@{clock}")).or_default().push(v);
+                            o.pass_samples
+                                .entry(format!("{pass}@{clock}"))
+                                .or_default()
+                                .push(v);
                         }
                     }
                 }
@@ -366,19 +524,24 @@ fn drive(
                 }
             }
             if n + 1 >= job.0.frames.max(4) && !job.0.window {
-                commands.spawn(Readback::texture(handles.target.clone())).observe(
-                    |ev: On<ReadbackComplete>, shared: Res<Shared>| {
-                        if let Ok(mut o) = shared.0.lock() {
-                            o.report.frame_rgba8 = ev.data.clone();
-                        }
-                    },
-                );
+                commands
+                    .spawn(Readback::texture(handles.target.clone()))
+                    .observe(
+                        |ev: On<ReadbackComplete>, shared: Res<Shared>, mut commands: Commands| {
+                            if let Ok(mut o) = shared.0.lock() {
+                                o.report.frame_rgba8 = ev.data.clone();
+                            }
+                            // A readback repeats every frame until its entity goes.
+                            commands.entity(ev.entity).despawn();
+                        },
+                    );
                 if let Some(twin) = &handles.twin {
                     commands.spawn(Readback::texture(twin.clone())).observe(
-                        |ev: On<ReadbackComplete>, shared: Res<Shared>| {
+                        |ev: On<ReadbackComplete>, shared: Res<Shared>, mut commands: Commands| {
                             if let Ok(mut o) = shared.0.lock() {
                                 o.twin_raw = ev.data.clone();
                             }
+                            commands.entity(ev.entity).despawn();
                         },
                     );
                 }
@@ -398,14 +561,22 @@ fn drive(
             o.report.size = [w, h];
             o.report.warnings = warnings.messages.clone();
             // Prefer GPU timestamps; fall back to CPU spans where the adapter has none.
-            let gpu: Vec<_> = o.pass_samples.keys().filter(|k| k.ends_with("@gpu")).cloned().collect();
+            let gpu: Vec<_> = o
+                .pass_samples
+                .keys()
+                .filter(|k| k.ends_with("@gpu"))
+                .cloned()
+                .collect();
             let clock = if gpu.is_empty() { "cpu" } else { "gpu" };
             o.report.timing = clock.to_string();
             o.pass_samples = std::mem::take(&mut o.pass_samples)
                 .into_iter()
-                .filter_map(|(k, v)| k.strip_suffix(&format!("@{clock}")).map(|p| (p.to_string(), v)))
+                .filter_map(|(k, v)| {
+                    k.strip_suffix(&format!("@{clock}"))
+                        .map(|p| (p.to_string(), v))
+                })
                 .collect();
-            if let Ok((_, image)) = main.single() {
+            if let Ok((_, image, _)) = main.single() {
                 if let Some(img) = image {
                     o.report.caustics = Some((*img.image).clone());
                     o.report.photons_traced = img.stats.photons_emitted;
@@ -415,18 +586,34 @@ fn drive(
                     o.report.caustics = Some(CausticImage::new(w, h));
                 }
             }
-            let bytes = format_bytes(if job.0.linear { TextureFormat::Rgba16Float } else { TextureFormat::Rgba8UnormSrgb });
+            let bytes = format_bytes(if job.0.linear {
+                TextureFormat::Rgba16Float
+            } else {
+                TextureFormat::Rgba8UnormSrgb
+            });
             let data = unpad_rows(&o.report.frame_rgba8, w, h, bytes);
             if job.0.linear {
                 o.report.linear_with = decode_f16_rgba(&data);
                 o.report.linear_without = decode_f16_rgba(&unpad_rows(&o.twin_raw, w, h, 8));
-                o.report.frame_rgba8 = o.report.linear_with.iter().flat_map(|p| tonemap_preview(*p)).collect();
+                o.report.frame_rgba8 = o
+                    .report
+                    .linear_with
+                    .iter()
+                    .flat_map(|p| tonemap_preview(*p))
+                    .collect();
             } else {
                 o.report.frame_rgba8 = data;
             }
-            o.report.exposure = bevy::camera::Exposure::default().exposure();
+            o.report.exposure = job
+                .0
+                .ev100
+                .map_or_else(bevy::camera::Exposure::default, |ev100| {
+                    bevy::camera::Exposure { ev100 }
+                })
+                .exposure();
             if o.report.frame_rgba8.len() != (w * h * 4) as usize {
-                o.error.get_or_insert("the frame readback did not arrive".to_string());
+                o.error
+                    .get_or_insert("the frame readback did not arrive".to_string());
             }
             exit.write(AppExit::Success);
         }
@@ -438,7 +625,9 @@ fn unpad_rows(data: &[u8], w: u32, h: u32, bpp: usize) -> Vec<u8> {
     let row = w as usize * bpp;
     let padded = row.div_ceil(256) * 256;
     if data.len() == padded * h as usize && padded != row {
-        data.chunks(padded).flat_map(|r| r[..row].iter().copied()).collect()
+        data.chunks(padded)
+            .flat_map(|r| r[..row].iter().copied())
+            .collect()
     } else {
         data.to_vec()
     }
@@ -450,7 +639,13 @@ fn f16_to_f32(b: u16) -> f32 {
     let m = (b & 0x3ff) as f32;
     match e {
         0 => s * m * 2f32.powi(-24),
-        31 => if m == 0.0 { s * f32::INFINITY } else { f32::NAN },
+        31 => {
+            if m == 0.0 {
+                s * f32::INFINITY
+            } else {
+                f32::NAN
+            }
+        }
         _ => s * (1.0 + m / 1024.0) * 2f32.powi(e - 15),
     }
 }
@@ -486,6 +681,26 @@ pub fn find_adapter() -> Result<String, String> {
             format!("{} ({:?})", i.name, i.backend)
         })
         .ok_or_else(|| {
-            "no GPU adapter found (no Vulkan driver? on Debian/Ubuntu install mesa-vulkan-drivers)".to_string()
+            "no GPU adapter found (no Vulkan driver? on Debian/Ubuntu install mesa-vulkan-drivers)"
+                .to_string()
         })
+}
+
+/// On a headless Linux machine without `XDG_RUNTIME_DIR`, the Wayland client library that the
+/// Vulkan loader's WSI pulls in prints "error: XDG_RUNTIME_DIR is invalid" several times,
+/// which drowns the renderer's own one-line errors. Point it at a private directory.
+///
+/// Call it first thing in `main`, before any thread exists (it sets an environment variable).
+pub fn quiet_headless_environment() {
+    #[cfg(target_os = "linux")]
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("bevy_caustics_runtime");
+        if std::fs::create_dir_all(&dir).is_ok() {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+            // SAFETY: documented precondition: called before any other thread is spawned,
+            // so no other thread reads the environment concurrently.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        }
+    }
 }

@@ -19,7 +19,11 @@ use glam::Vec3;
 /// (no interface); the grazing limit `cos_i = 0` gives R = 1 without dividing by zero.
 #[inline]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let eta = if eta.is_finite() && eta > 0.0 { eta } else { 1.0 };
+    let eta = if eta.is_finite() && eta > 0.0 {
+        eta
+    } else {
+        1.0
+    };
     if eta == 1.0 {
         // No interface (IOR 1): nothing reflects, even at grazing incidence where rounding
         // would otherwise report total internal reflection.
@@ -50,7 +54,11 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 /// Zero under total internal reflection and at grazing incidence; 1 for `eta = 1`.
 #[inline]
 pub fn fresnel_dielectric_transmittance(cos_i: f32, eta: f32) -> f32 {
-    let eta = if eta.is_finite() && eta > 0.0 { eta } else { 1.0 };
+    let eta = if eta.is_finite() && eta > 0.0 {
+        eta
+    } else {
+        1.0
+    };
     if eta == 1.0 {
         return 1.0;
     }

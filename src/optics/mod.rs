@@ -10,14 +10,14 @@
 //! - A normal passed to [`reflect`] / [`refract`] may face either side; the functions orient it.
 //! - `eta` is the ratio `n_incident / n_transmitted`.
 
-mod fresnel;
 mod footprint;
+mod fresnel;
 mod offset;
 mod sampling;
 
 pub use footprint::*;
-pub use offset::*;
 pub use fresnel::*;
+pub use offset::*;
 pub use sampling::*;
 
 use glam::Vec3;
@@ -81,4 +81,3 @@ pub fn finite_or_zero(v: Vec3) -> Vec3 {
 pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
-

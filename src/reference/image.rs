@@ -19,7 +19,11 @@ pub struct CausticImage {
 impl CausticImage {
     /// A black image.
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, data: vec![Vec3::ZERO; (width * height) as usize] }
+        Self {
+            width,
+            height,
+            data: vec![Vec3::ZERO; (width * height) as usize],
+        }
     }
 
     /// Pixel at (x, y).
@@ -71,6 +75,10 @@ impl CausticImage {
                 n += 1;
             }
         }
-        if n == 0 { Vec3::ZERO } else { (s / n as f64).as_vec3() }
+        if n == 0 {
+            Vec3::ZERO
+        } else {
+            (s / n as f64).as_vec3()
+        }
     }
 }

@@ -30,7 +30,11 @@ fn in_mask(mask: Option<&[bool]>, i: usize) -> bool {
 /// Compare `test` against `reference` over `mask` (true = receiver pixel).
 ///
 /// Returns `None` if the sizes differ.
-pub fn compare(test: &CausticImage, reference: &CausticImage, mask: Option<&[bool]>) -> Option<ImageMetrics> {
+pub fn compare(
+    test: &CausticImage,
+    reference: &CausticImage,
+    mask: Option<&[bool]>,
+) -> Option<ImageMetrics> {
     if test.width != reference.width || test.height != reference.height {
         return None;
     }
@@ -54,7 +58,13 @@ pub fn compare(test: &CausticImage, reference: &CausticImage, mask: Option<&[boo
         rmse,
         relative_rmse: if mean_ref > 0.0 { rmse / mean_ref } else { 0.0 },
         flip: flip_mean(test, reference, mask),
-        energy_error: if sr > 0.0 { (st - sr) / sr } else if st > 0.0 { 1.0 } else { 0.0 },
+        energy_error: if sr > 0.0 {
+            (st - sr) / sr
+        } else if st > 0.0 {
+            1.0
+        } else {
+            0.0
+        },
         pixels: n,
     })
 }
@@ -87,7 +97,11 @@ pub fn flip_mean(test: &CausticImage, reference: &CausticImage, mask: Option<&[b
     let encode = |img: &CausticImage| -> Vec<u8> {
         let mut out = Vec::with_capacity(img.data.len() * 3);
         for (i, v) in img.data.iter().enumerate() {
-            let v = if in_mask(mask, i) && v.is_finite() { *v * scale } else { Vec3::ZERO };
+            let v = if in_mask(mask, i) && v.is_finite() {
+                *v * scale
+            } else {
+                Vec3::ZERO
+            };
             for c in v.to_array() {
                 out.push((srgb_encode(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8);
             }
@@ -111,5 +125,9 @@ pub fn flip_mean(test: &CausticImage, reference: &CausticImage, mask: Option<&[b
 
 /// The sRGB transfer function.
 pub fn srgb_encode(x: f32) -> f32 {
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
 }

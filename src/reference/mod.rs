@@ -8,5 +8,5 @@ pub mod tracer;
 
 pub use image::CausticImage;
 pub use metrics::{ImageMetrics, compare};
+pub use technique::{CausticsReferenceImage, ReferenceProgress, ReferenceStatus};
 pub use tracer::{TraceOutput, TraceSettings, TraceStats, trace};
-pub use technique::{CausticsReferenceImage, ReferenceStatus};

@@ -3,6 +3,7 @@
 //! which uploads it into the view's caustics buffer.
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use bevy::camera::Projection;
 use bevy::prelude::*;
@@ -39,6 +40,26 @@ pub enum ReferenceStatus {
     Ready,
 }
 
+/// Photons traced so far by the running reference render of a camera, and the total.
+#[derive(Component, Clone, Debug)]
+pub struct ReferenceProgress {
+    /// Photons done (updated from the worker threads).
+    pub done: Arc<AtomicU64>,
+    /// Photons in this render.
+    pub total: u64,
+}
+
+impl ReferenceProgress {
+    /// Fraction done in [0, 1].
+    pub fn fraction(&self) -> f64 {
+        if self.total == 0 {
+            1.0
+        } else {
+            self.done.load(Ordering::Relaxed) as f64 / self.total as f64
+        }
+    }
+}
+
 #[derive(Component)]
 struct ReferenceTask {
     key: RenderKey,
@@ -54,15 +75,26 @@ struct RenderKey {
 }
 
 /// The plain camera of a Bevy camera, if its size is known.
-pub fn trace_camera(camera: &Camera, projection: &Projection, transform: &GlobalTransform) -> Option<TraceCamera> {
+pub fn trace_camera(
+    camera: &Camera,
+    projection: &Projection,
+    transform: &GlobalTransform,
+) -> Option<TraceCamera> {
     let size = camera.physical_viewport_size()?;
     let projection = match projection {
         Projection::Perspective(p) => CameraProjection::Perspective { fov_y: p.fov },
-        Projection::Orthographic(o) => CameraProjection::Orthographic { height: o.area.height() },
+        Projection::Orthographic(o) => CameraProjection::Orthographic {
+            height: o.area.height(),
+        },
         _ => return None,
     };
     let world_from_view: Affine3A = transform.affine();
-    Some(TraceCamera { world_from_view, projection, width: size.x, height: size.y })
+    Some(TraceCamera {
+        world_from_view,
+        projection,
+        width: size.x,
+        height: size.y,
+    })
 }
 
 #[allow(clippy::type_complexity)]
@@ -86,16 +118,16 @@ fn run_reference(
             continue;
         }
         let mut e = commands.entity(entity);
-        if status.is_none() {
-            e.insert(ReferenceStatus::Inactive);
-        }
         if !scene.is_active() {
             if status.as_deref() != Some(&ReferenceStatus::Inactive) {
-                e.remove::<(CausticsReferenceImage, ReferenceTask, RenderKey)>().insert(ReferenceStatus::Inactive);
+                e.remove::<(CausticsReferenceImage, ReferenceTask, RenderKey)>()
+                    .insert(ReferenceStatus::Inactive);
             }
             continue;
         }
-        let Some(cam) = trace_camera(camera, projection, gt) else { continue };
+        let Some(cam) = trace_camera(camera, projection, gt) else {
+            continue;
+        };
         let key = RenderKey {
             generation: scene.generation,
             camera: cam,
@@ -107,7 +139,12 @@ fn run_reference(
                 *serial += 1;
                 let k = t.key.clone();
                 e.remove::<ReferenceTask>().insert((
-                    CausticsReferenceImage { image: Arc::new(image), stats, serial: *serial, seconds },
+                    CausticsReferenceImage {
+                        image: Arc::new(image),
+                        stats,
+                        serial: *serial,
+                        seconds,
+                    },
                     k,
                     ReferenceStatus::Ready,
                 ));
@@ -122,17 +159,34 @@ fn run_reference(
         let scene = scene.clone();
         let photons = key.photons;
         let seed = key.seed;
+        let progress = ReferenceProgress {
+            done: Arc::new(AtomicU64::new(0)),
+            total: photons * scene.lights.len() as u64,
+        };
+        let done = progress.done.clone();
         let task = AsyncComputeTaskPool::get().spawn(async move {
             let start = std::time::Instant::now();
             let lights: Vec<_> = scene.lights.iter().map(|(_, l)| *l).collect();
-            let settings = TraceSettings { photons_per_light: photons, seed, ..default() };
-            let out = trace(&scene.tlas, &lights, &cam, &settings, None);
+            let settings = TraceSettings {
+                photons_per_light: photons,
+                seed,
+                ..default()
+            };
+            let report = |n: u64, _total: u64| done.store(n, Ordering::Relaxed);
+            let out = trace(&scene.tlas, &lights, &cam, &settings, Some(&report));
             (out.image, out.stats, start.elapsed().as_secs_f64())
         });
-        e.insert((ReferenceTask { key, task }, ReferenceStatus::Tracing));
+        e.insert((
+            ReferenceTask { key, task },
+            ReferenceStatus::Tracing,
+            progress,
+        ));
     }
 }
 
 pub(crate) fn plugin(app: &mut App) {
-    app.add_systems(PostUpdate, run_reference.in_set(crate::CausticsSystems::Technique));
+    app.add_systems(
+        PostUpdate,
+        run_reference.in_set(crate::CausticsSystems::Technique),
+    );
 }

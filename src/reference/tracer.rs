@@ -26,7 +26,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::optics::{self, PixelFocal, Pcg32};
+use crate::optics::{self, Pcg32, PixelFocal};
 use crate::scene::{CameraProjection, Surface, Tlas, TraceCamera, TraceLight};
 
 use super::image::CausticImage;
@@ -129,7 +129,10 @@ fn make_emitter(light: &TraceLight, tlas: &Tlas, photons: u64) -> Option<Emitter
     let scene_radius = ((shi - slo) * 0.5).length() + (center - (slo + shi) * 0.5).length();
     let n = photons.max(1) as f32;
     Some(match *light {
-        TraceLight::Directional { direction, illuminance } => {
+        TraceLight::Directional {
+            direction,
+            illuminance,
+        } => {
             let d = direction.try_normalize()?;
             Emitter {
                 light: *light,
@@ -160,7 +163,13 @@ fn make_emitter(light: &TraceLight, tlas: &Tlas, photons: u64) -> Option<Emitter
                 flux: flux / (4.0 * core::f32::consts::PI) * omega / n,
             }
         }
-        TraceLight::Spot { position, direction, flux, outer_angle, .. } => {
+        TraceLight::Spot {
+            position,
+            direction,
+            flux,
+            outer_angle,
+            ..
+        } => {
             let axis = direction.try_normalize()?;
             let cos_max = outer_angle.clamp(0.0, core::f32::consts::PI).cos();
             let omega = optics::cone_solid_angle(cos_max);
@@ -191,10 +200,18 @@ impl Emitter {
                 let local = optics::uniform_cone(rng.next_vec2(), self.cos_max);
                 (self.center, optics::to_world(local, self.axis), self.flux)
             }
-            TraceLight::Spot { inner_angle, outer_angle, .. } => {
+            TraceLight::Spot {
+                inner_angle,
+                outer_angle,
+                ..
+            } => {
                 let local = optics::uniform_cone(rng.next_vec2(), self.cos_max);
                 let w = optics::spot_attenuation(local.z, inner_angle, outer_angle);
-                (self.center, optics::to_world(local, self.axis), self.flux * w)
+                (
+                    self.center,
+                    optics::to_world(local, self.axis),
+                    self.flux * w,
+                )
             }
         }
     }
@@ -214,11 +231,17 @@ impl CameraMap {
             CameraProjection::Perspective { fov_y } => {
                 (PixelFocal::from_fov_y(fov_y, cam.width, cam.height), 0.0)
             }
-            CameraProjection::Orthographic { height } => {
-                (PixelFocal { fx: 1.0, fy: 1.0 }, height / cam.height.max(1) as f32)
-            }
+            CameraProjection::Orthographic { height } => (
+                PixelFocal { fx: 1.0, fy: 1.0 },
+                height / cam.height.max(1) as f32,
+            ),
         };
-        Self { cam: *cam, view_from_world: cam.world_from_view.inverse(), focal, ortho_pixel }
+        Self {
+            cam: *cam,
+            view_from_world: cam.world_from_view.inverse(),
+            focal,
+            ortho_pixel,
+        }
     }
 
     /// Pixel index and footprint area of world point `p` with unit normal `n`.
@@ -239,14 +262,24 @@ impl CameraMap {
                 let dist = to_eye.length();
                 let cos_s = n.dot(to_eye / dist).abs();
                 let cos_a = z / v.length();
-                area_cos = (optics::pixel_footprint_area(dist, cos_a, cos_s, self.focal), cos_s);
+                area_cos = (
+                    optics::pixel_footprint_area(dist, cos_a, cos_s, self.focal),
+                    cos_s,
+                );
             }
             CameraProjection::Orthographic { .. } => {
                 px = 0.5 * w + v.x / self.ortho_pixel;
                 py = 0.5 * h - v.y / self.ortho_pixel;
-                let fwd = self.cam.world_from_view.transform_vector3(Vec3::NEG_Z).normalize();
+                let fwd = self
+                    .cam
+                    .world_from_view
+                    .transform_vector3(Vec3::NEG_Z)
+                    .normalize();
                 let cos_s = n.dot(fwd).abs();
-                area_cos = (optics::ortho_footprint_area(self.ortho_pixel, self.ortho_pixel, cos_s), cos_s);
+                area_cos = (
+                    optics::ortho_footprint_area(self.ortho_pixel, self.ortho_pixel, cos_s),
+                    cos_s,
+                );
             }
         }
         if !(px >= 0.0 && py >= 0.0 && px < w && py < h) {
@@ -268,7 +301,11 @@ impl CameraMap {
                 (d / l, l)
             }
             CameraProjection::Orthographic { .. } => {
-                let back = self.cam.world_from_view.transform_vector3(Vec3::Z).normalize();
+                let back = self
+                    .cam
+                    .world_from_view
+                    .transform_vector3(Vec3::Z)
+                    .normalize();
                 let l = (self.cam.position() - p).dot(back);
                 (back, l)
             }
@@ -323,7 +360,18 @@ pub fn trace(
                 let (o, d, flux) = em.emit(&mut rng);
                 stats.photons_emitted += 1;
                 stats.flux_emitted += flux.as_dvec3();
-                trace_photon(tlas, &map, o, d, flux, &mut rng, settings, scene_scale, &mut deposits, &mut stats);
+                trace_photon(
+                    tlas,
+                    &map,
+                    o,
+                    d,
+                    flux,
+                    &mut rng,
+                    settings,
+                    scene_scale,
+                    &mut deposits,
+                    &mut stats,
+                );
             }
             if let Some(p) = progress {
                 let now = done.fetch_add(end - begin, Ordering::Relaxed) + (end - begin);
@@ -373,8 +421,11 @@ fn trace_photon(
             return;
         };
         if let Some(m) = medium
-            && let Surface::Dielectric { attenuation_color, attenuation_distance, .. } =
-                tlas.instances[m as usize].surface
+            && let Surface::Dielectric {
+                attenuation_color,
+                attenuation_distance,
+                ..
+            } = tlas.instances[m as usize].surface
         {
             flux *= optics::beer_lambert(attenuation_color, attenuation_distance, hit.t);
         }
@@ -401,7 +452,10 @@ fn trace_photon(
                 stats.photons_deposited += 1;
                 stats.flux_deposited += f.as_dvec3();
                 *stats.flux_per_instance.entry(hit.instance).or_default() += f.as_dvec3();
-                *stats.flux_per_path.entry((reflections, refractions)).or_default() += f.as_dvec3();
+                *stats
+                    .flux_per_path
+                    .entry((reflections, refractions))
+                    .or_default() += f.as_dvec3();
                 deposit(tlas, map, p, ng_f, f, scene_scale, deposits, stats);
                 return;
             }
@@ -443,10 +497,12 @@ fn trace_photon(
                     let dt = if thin {
                         Some(d)
                     } else {
-                        optics::refract(d, ns_f, eta).filter(|t| t.dot(ng_f) < 0.0).or_else(|| {
-                            stats.normal_fallbacks += 1;
-                            optics::refract(d, ng_f, eta)
-                        })
+                        optics::refract(d, ns_f, eta)
+                            .filter(|t| t.dot(ng_f) < 0.0)
+                            .or_else(|| {
+                                stats.normal_fallbacks += 1;
+                                optics::refract(d, ng_f, eta)
+                            })
                     };
                     let Some(dt) = dt else {
                         // TIR with R < 1 can only come from a shading/geometric normal
@@ -504,4 +560,3 @@ fn deposit(
     stats.photons_in_view += 1;
     deposits.push((pixel, e));
 }
-

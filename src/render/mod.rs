@@ -43,7 +43,10 @@ impl CausticsDispatchLog {
 
     /// Everything recorded since the last call.
     pub fn take(&self) -> Vec<&'static str> {
-        self.0.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default()
+        self.0
+            .lock()
+            .map(|mut v| std::mem::take(&mut *v))
+            .unwrap_or_default()
     }
 }
 
@@ -65,7 +68,9 @@ impl ExtractComponent for Caustics {
     type QueryFilter = ();
     type Out = ExtractedCaustics;
 
-    fn extract_component((c, reference): (&Caustics, Option<&CausticsReferenceImage>)) -> Option<Self::Out> {
+    fn extract_component(
+        (c, reference): (&Caustics, Option<&CausticsReferenceImage>),
+    ) -> Option<Self::Out> {
         // Nothing to composite: the view carries no caustics components, and no pass runs.
         let reference = reference.map(|r| (r.image.clone(), r.serial))?;
         Some(ExtractedCaustics {
@@ -93,10 +98,17 @@ fn prepare_caustics_buffers(
     mut commands: Commands,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
-    mut views: Query<(Entity, &ExtractedCaustics, &ExtractedCamera, Option<&mut ViewCausticsBuffer>)>,
+    mut views: Query<(
+        Entity,
+        &ExtractedCaustics,
+        &ExtractedCamera,
+        Option<&mut ViewCausticsBuffer>,
+    )>,
 ) {
     for (entity, caustics, camera, buffer) in &mut views {
-        let Some(size) = camera.physical_viewport_size else { continue };
+        let Some(size) = camera.physical_viewport_size else {
+            continue;
+        };
         if size.x == 0 || size.y == 0 {
             continue;
         }
@@ -106,7 +118,11 @@ fn prepare_caustics_buffers(
             _ => {
                 let texture = device.create_texture(&TextureDescriptor {
                     label: Some("caustics_buffer"),
-                    size: Extent3d { width: size.x, height: size.y, depth_or_array_layers: 1 },
+                    size: Extent3d {
+                        width: size.x,
+                        height: size.y,
+                        depth_or_array_layers: 1,
+                    },
                     mip_level_count: 1,
                     sample_count: 1,
                     dimension: TextureDimension::D2,
@@ -118,7 +134,12 @@ fn prepare_caustics_buffers(
                     view_formats: &[],
                 });
                 let view = texture.create_view(&TextureViewDescriptor::default());
-                new_buffer = Some(ViewCausticsBuffer { texture, view, size, uploaded: 0 });
+                new_buffer = Some(ViewCausticsBuffer {
+                    texture,
+                    view,
+                    size,
+                    uploaded: 0,
+                });
                 new_buffer.as_mut().unwrap()
             }
         };
@@ -146,10 +167,23 @@ pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
         }
     }
     queue.write_texture(
-        TexelCopyTextureInfo { texture, mip_level: 0, origin: Origin3d::ZERO, aspect: TextureAspect::All },
+        TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: Origin3d::ZERO,
+            aspect: TextureAspect::All,
+        },
         &bytes,
-        TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(image.width * 16), rows_per_image: Some(image.height) },
-        Extent3d { width: image.width, height: image.height, depth_or_array_layers: 1 },
+        TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(image.width * 16),
+            rows_per_image: Some(image.height),
+        },
+        Extent3d {
+            width: image.width,
+            height: image.height,
+            depth_or_array_layers: 1,
+        },
     );
 }
 
@@ -157,8 +191,11 @@ pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
 pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
     composite::build(app);
-    let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
-    render_app
-        .insert_resource(log)
-        .add_systems(Render, prepare_caustics_buffers.in_set(RenderSystems::PrepareResources));
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app.insert_resource(log).add_systems(
+        Render,
+        prepare_caustics_buffers.in_set(RenderSystems::PrepareResources),
+    );
 }

@@ -80,11 +80,19 @@ impl Blas {
             let [a, b, c] = idx.map(|k| geometry.positions[k as usize]);
             let (e1, e2) = (b - a, c - a);
             let area2 = e1.cross(e2).length();
-            if !(a.is_finite() && b.is_finite() && c.is_finite()) || !(area2 > 0.0) || !area2.is_finite() {
+            if !(a.is_finite() && b.is_finite() && c.is_finite())
+                || !(area2 > 0.0)
+                || !area2.is_finite()
+            {
                 degenerate += 1;
                 continue;
             }
-            tris.push(Tri { v0: a, e1, e2, source: i as u32 });
+            tris.push(Tri {
+                v0: a,
+                e1,
+                e2,
+                source: i as u32,
+            });
         }
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -114,7 +122,11 @@ impl Blas {
                 &mut Duration::default(),
             );
             // Reorder triangles into BVH order so leaves index them directly.
-            tris = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
+            tris = bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| tris[i as usize])
+                .collect();
             Some(bvh)
         };
         Self {
@@ -160,7 +172,9 @@ impl Blas {
         let ns = match &self.geometry.normals {
             Some(n) if n.len() == self.geometry.positions.len() => {
                 let w = 1.0 - bary.x - bary.y;
-                let s = n[idx[0] as usize] * w + n[idx[1] as usize] * bary.x + n[idx[2] as usize] * bary.y;
+                let s = n[idx[0] as usize] * w
+                    + n[idx[1] as usize] * bary.x
+                    + n[idx[2] as usize] * bary.y;
                 let s = s.normalize_or_zero();
                 if s == Vec3::ZERO { ng } else { s }
             }
@@ -235,7 +249,14 @@ impl Instance {
         } else {
             (Affine3A::from_scale(Vec3::ZERO), Mat3::ZERO)
         };
-        Self { blas, world_from_local, local_from_world, normal_matrix, surface, id }
+        Self {
+            blas,
+            world_from_local,
+            local_from_world,
+            normal_matrix,
+            surface,
+            id,
+        }
     }
 
     /// World-space bounds (min, max).
@@ -284,7 +305,11 @@ impl Tlas {
             })
             .collect();
         let bvh = (!boxes.is_empty()).then(|| {
-            obvhs::bvh2::builder::build_bvh2(&boxes, BvhBuildParams::medium_build(), &mut Duration::default())
+            obvhs::bvh2::builder::build_bvh2(
+                &boxes,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            )
         });
         Self { instances, bvh }
     }
@@ -314,7 +339,12 @@ impl Tlas {
             match inst.blas.intersect(lo, ld, r.tmin, r.tmax) {
                 Some((t, tri, bary)) => {
                     if found.is_none_or(|f| t < f.t) {
-                        found = Some(Hit { t, instance: inst_index, triangle: tri, bary });
+                        found = Some(Hit {
+                            t,
+                            instance: inst_index,
+                            triangle: tri,
+                            bary,
+                        });
                     }
                     t
                 }

@@ -15,7 +15,9 @@ use bevy::pbr::{MeshMaterial3d, StandardMaterial};
 use bevy::prelude::*;
 use glam::Vec3 as GVec3;
 
-use super::{Blas, Instance, MaterialParams, MeshGeometry, Surface, Tlas, TraceLight, classify_material};
+use super::{
+    Blas, Instance, MaterialParams, MeshGeometry, Surface, Tlas, TraceLight, classify_material,
+};
 use crate::components::validate::CausticsWarnings;
 use crate::components::{CausticLight, CausticMaterial};
 
@@ -53,7 +55,8 @@ pub fn mesh_geometry(mesh: &Mesh) -> Option<MeshGeometry> {
     if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
         return None;
     }
-    let Ok(VertexAttributeValues::Float32x3(p)) = mesh.try_attribute(Mesh::ATTRIBUTE_POSITION) else {
+    let Ok(VertexAttributeValues::Float32x3(p)) = mesh.try_attribute(Mesh::ATTRIBUTE_POSITION)
+    else {
         return None;
     };
     let positions: Vec<GVec3> = p.iter().map(|v| GVec3::from_array(*v)).collect();
@@ -69,7 +72,11 @@ pub fn mesh_geometry(mesh: &Mesh) -> Option<MeshGeometry> {
         Err(_) => (0..positions.len() as u32).collect(),
     };
     let indices = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    Some(MeshGeometry { positions, normals, indices })
+    Some(MeshGeometry {
+        positions,
+        normals,
+        indices,
+    })
 }
 
 /// The classifier's view of a `StandardMaterial`.
@@ -94,14 +101,27 @@ fn override_surface(m: &CausticMaterial) -> Surface {
         GVec3::new(l.red, l.green, l.blue).clamp(GVec3::ZERO, GVec3::ONE)
     };
     match m {
-        CausticMaterial::Dielectric { ior, attenuation_color, attenuation_distance, thin } => Surface::Dielectric {
-            ior: if ior.is_finite() { ior.clamp(1.0, 4.0) } else { 1.0 },
+        CausticMaterial::Dielectric {
+            ior,
+            attenuation_color,
+            attenuation_distance,
+            thin,
+        } => Surface::Dielectric {
+            ior: if ior.is_finite() {
+                ior.clamp(1.0, 4.0)
+            } else {
+                1.0
+            },
             attenuation_color: rgb(attenuation_color),
             attenuation_distance: *attenuation_distance,
             thin: *thin,
         },
-        CausticMaterial::Mirror { reflectance } => Surface::Conductor { f0: rgb(reflectance) },
-        CausticMaterial::Receiver { albedo } => Surface::Diffuse { albedo: rgb(albedo) },
+        CausticMaterial::Mirror { reflectance } => Surface::Conductor {
+            f0: rgb(reflectance),
+        },
+        CausticMaterial::Receiver { albedo } => Surface::Diffuse {
+            albedo: rgb(albedo),
+        },
     }
 }
 
@@ -139,8 +159,29 @@ type LightQuery<'w, 's> = Query<
 
 /// Change detection inputs of [`gather_scene`].
 type Dirty<'w, 's> = (
-    Query<'w, 's, (), Or<(Changed<Mesh3d>, Changed<MeshMaterial3d<StandardMaterial>>, Changed<CausticMaterial>, Changed<GlobalTransform>, Changed<InheritedVisibility>)>>,
-    Query<'w, 's, (), Or<(Changed<CausticLight>, Changed<DirectionalLight>, Changed<PointLight>, Changed<SpotLight>)>>,
+    Query<
+        'w,
+        's,
+        (),
+        Or<(
+            Changed<Mesh3d>,
+            Changed<MeshMaterial3d<StandardMaterial>>,
+            Changed<CausticMaterial>,
+            Changed<GlobalTransform>,
+            Changed<InheritedVisibility>,
+        )>,
+    >,
+    Query<
+        'w,
+        's,
+        (),
+        Or<(
+            Changed<CausticLight>,
+            Changed<DirectionalLight>,
+            Changed<PointLight>,
+            Changed<SpotLight>,
+        )>,
+    >,
     RemovedComponents<'w, 's, Mesh3d>,
     RemovedComponents<'w, 's, CausticLight>,
     MessageReader<'w, 's, AssetEvent<Mesh>>,
@@ -155,13 +196,23 @@ fn gather_scene(
     mut warnings: ResMut<CausticsWarnings>,
     meshes_q: MeshQuery,
     lights_q: LightQuery,
-    (dirty_meshes, dirty_lights, mut removed_meshes, mut removed_lights, mut mesh_events, mut mat_events): Dirty,
+    (
+        dirty_meshes,
+        dirty_lights,
+        mut removed_meshes,
+        mut removed_lights,
+        mut mesh_events,
+        mut mat_events,
+    ): Dirty,
     meshes: Res<Assets<Mesh>>,
     materials: Res<Assets<StandardMaterial>>,
 ) {
     let mut dirty = false;
     for ev in mesh_events.read() {
-        if let AssetEvent::Modified { id } | AssetEvent::Removed { id } | AssetEvent::Unused { id } = ev {
+        if let AssetEvent::Modified { id }
+        | AssetEvent::Removed { id }
+        | AssetEvent::Unused { id } = ev
+        {
             cache.0.remove(id);
         }
         dirty = true;
@@ -173,7 +224,12 @@ fn gather_scene(
         // No caustic light: nothing to gather, nothing will run.
         if !scene.lights.is_empty() || scene.casters > 0 {
             let builds = (scene.blas_builds, scene.degenerate_triangles);
-            *scene = CausticsScene { generation: scene.generation + 1, blas_builds: builds.0, degenerate_triangles: builds.1, ..default() };
+            *scene = CausticsScene {
+                generation: scene.generation + 1,
+                blas_builds: builds.0,
+                degenerate_triangles: builds.1,
+                ..default()
+            };
         }
         return;
     }
@@ -191,7 +247,16 @@ fn gather_scene(
             (None, Some(m)) => {
                 let params = material_params(m);
                 if m.specular_transmission > 0.0 && !(m.ior >= 1.0) && warned.insert(entity) {
-                    warnings.report(entity, name, "StandardMaterial", "ior", &format!("{} is below 1 for a transmissive material; clamped to 1", m.ior));
+                    warnings.report(
+                        entity,
+                        name,
+                        "StandardMaterial",
+                        "ior",
+                        &format!(
+                            "{} is below 1 for a transmissive material; clamped to 1",
+                            m.ior
+                        ),
+                    );
                 }
                 classify_material(&params)
             }
@@ -227,7 +292,10 @@ fn gather_scene(
         let pos = gt.translation();
         let fwd = gt.forward().as_vec3();
         let l = if let Some(d) = dir {
-            TraceLight::Directional { direction: fwd, illuminance: light_rgb(d.color) * d.illuminance * s }
+            TraceLight::Directional {
+                direction: fwd,
+                illuminance: light_rgb(d.color) * d.illuminance * s,
+            }
         } else if let Some(sp) = spot {
             TraceLight::Spot {
                 position: pos,
@@ -237,7 +305,10 @@ fn gather_scene(
                 outer_angle: sp.outer_angle,
             }
         } else if let Some(p) = point {
-            TraceLight::Point { position: pos, flux: light_rgb(p.color) * p.intensity * s }
+            TraceLight::Point {
+                position: pos,
+                flux: light_rgb(p.color) * p.intensity * s,
+            }
         } else {
             continue;
         };

@@ -88,7 +88,11 @@ impl Default for MaterialParams {
 pub fn classify_material(m: &MaterialParams) -> Surface {
     if m.specular_transmission > 0.0 {
         Surface::Dielectric {
-            ior: if m.ior.is_finite() { m.ior.max(1.0) } else { 1.5 },
+            ior: if m.ior.is_finite() {
+                m.ior.max(1.0)
+            } else {
+                1.5
+            },
             attenuation_color: m.attenuation_color.clamp(Vec3::ZERO, Vec3::ONE),
             attenuation_distance: if m.attenuation_distance > 0.0 {
                 m.attenuation_distance

@@ -7,7 +7,11 @@ use glam::{Vec2, Vec3};
 use crate::scene::MeshGeometry;
 
 fn mesh(positions: Vec<Vec3>, normals: Vec<Vec3>, indices: Vec<[u32; 3]>) -> MeshGeometry {
-    MeshGeometry { positions, normals: Some(normals), indices }
+    MeshGeometry {
+        positions,
+        normals: Some(normals),
+        indices,
+    }
 }
 
 /// A `w x d` quad in the XZ plane, normal +Y, centred at the origin.
@@ -41,7 +45,11 @@ pub fn cuboid(s: Vec3) -> MeshGeometry {
     ];
     for (normal, u, v) in faces {
         // u x v == normal for a counter-clockwise front face.
-        let (u, v) = if u.cross(v).dot(normal) > 0.0 { (u, v) } else { (v, u) };
+        let (u, v) = if u.cross(v).dot(normal) > 0.0 {
+            (u, v)
+        } else {
+            (v, u)
+        };
         let base = p.len() as u32;
         for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
             p.push((normal + u * a + v * b) * h);
@@ -61,7 +69,11 @@ pub fn uv_sphere(radius: f32, segments: u32, rings: u32) -> MeshGeometry {
         let theta = PI * r as f32 / rings as f32;
         for s in 0..=segments {
             let phi = TAU * s as f32 / segments as f32;
-            let d = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            let d = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
             p.push(d * radius);
             n.push(d);
         }

@@ -29,7 +29,11 @@ pub fn write_gltf(scene: &SceneDesc, dir: &Path) -> std::io::Result<()> {
         views.len() - 1
     };
     for (mi, m) in scene.meshes.iter().enumerate() {
-        let material = scene.nodes.iter().find(|n| n.mesh == mi).map_or(0, |n| n.material);
+        let material = scene
+            .nodes
+            .iter()
+            .find(|n| n.mesh == mi)
+            .map_or(0, |n| n.material);
         let start = bin.len();
         push_f32s(&mut bin, m.positions.iter().flat_map(|p| p.to_array()));
         let pv = view(&mut bin, start, 34962);
@@ -37,15 +41,19 @@ pub fn write_gltf(scene: &SceneDesc, dir: &Path) -> std::io::Result<()> {
             (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
             |(a, b), p| (a.min(*p), b.max(*p)),
         );
-        accessors.push(json!({"bufferView": pv, "componentType": 5126, "count": m.positions.len(),
-            "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()}));
+        accessors.push(
+            json!({"bufferView": pv, "componentType": 5126, "count": m.positions.len(),
+            "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()}),
+        );
         let pos = accessors.len() - 1;
         let mut attributes = json!({"POSITION": pos});
         if let Some(n) = &m.normals {
             let start = bin.len();
             push_f32s(&mut bin, n.iter().flat_map(|p| p.to_array()));
             let nv = view(&mut bin, start, 34962);
-            accessors.push(json!({"bufferView": nv, "componentType": 5126, "count": n.len(), "type": "VEC3"}));
+            accessors.push(
+                json!({"bufferView": nv, "componentType": 5126, "count": n.len(), "type": "VEC3"}),
+            );
             attributes["NORMAL"] = json!(accessors.len() - 1);
         }
         let start = bin.len();
@@ -107,19 +115,27 @@ pub fn write_gltf(scene: &SceneDesc, dir: &Path) -> std::io::Result<()> {
                 v["type"] = json!("point");
                 v["intensity"] = json!(candela);
             }
-            LightKind::Spot { candela, inner, outer } => {
+            LightKind::Spot {
+                candela,
+                inner,
+                outer,
+            } => {
                 v["type"] = json!("spot");
                 v["intensity"] = json!(candela);
                 v["spot"] = json!({"innerConeAngle": inner, "outerConeAngle": outer});
             }
         }
         lights.push(v);
-        nodes.push(json!({"name": l.name, "translation": l.translation.to_array(),
+        nodes.push(
+            json!({"name": l.name, "translation": l.translation.to_array(),
             "rotation": l.rotation.to_array(),
-            "extensions": {"KHR_lights_punctual": {"light": lights.len() - 1}}}));
+            "extensions": {"KHR_lights_punctual": {"light": lights.len() - 1}}}),
+        );
     }
-    nodes.push(json!({"name": "camera", "camera": 0, "translation": scene.camera.translation.to_array(),
-        "rotation": scene.camera.rotation.to_array()}));
+    nodes.push(
+        json!({"name": "camera", "camera": 0, "translation": scene.camera.translation.to_array(),
+        "rotation": scene.camera.rotation.to_array()}),
+    );
     let root: Vec<usize> = (0..nodes.len()).collect();
     let bin_name = format!("{}.bin", scene.name);
     let doc = json!({

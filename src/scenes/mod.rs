@@ -122,11 +122,22 @@ pub fn shine_along(dir: Vec3) -> Quat {
 
 impl SceneDesc {
     fn new(name: &str, camera: CameraDesc) -> Self {
-        Self { name: name.into(), meshes: vec![], materials: vec![], nodes: vec![], lights: vec![], camera }
+        Self {
+            name: name.into(),
+            meshes: vec![],
+            materials: vec![],
+            nodes: vec![],
+            lights: vec![],
+            camera,
+        }
     }
 
     fn material(&mut self, name: &str, params: MaterialParams, double_sided: bool) -> usize {
-        self.materials.push(MaterialDesc { name: name.into(), params, double_sided });
+        self.materials.push(MaterialDesc {
+            name: name.into(),
+            params,
+            double_sided,
+        });
         self.materials.len() - 1
     }
 
@@ -147,7 +158,11 @@ impl SceneDesc {
     /// them: directional lux unchanged, point and spot `candela x 4π` lumens), and the
     /// camera at `width x height`.
     pub fn to_trace(&self, width: u32, height: u32) -> (Tlas, Vec<TraceLight>, TraceCamera) {
-        let blas: Vec<Arc<Blas>> = self.meshes.iter().map(|m| Arc::new(Blas::build(m.clone()))).collect();
+        let blas: Vec<Arc<Blas>> = self
+            .meshes
+            .iter()
+            .map(|m| Arc::new(Blas::build(m.clone())))
+            .collect();
         let instances = self
             .nodes
             .iter()
@@ -168,13 +183,19 @@ impl SceneDesc {
                 let dir = l.rotation * Vec3::NEG_Z;
                 let four_pi = 4.0 * core::f32::consts::PI;
                 match l.kind {
-                    LightKind::Directional { lux } => {
-                        TraceLight::Directional { direction: dir, illuminance: l.color * lux }
-                    }
-                    LightKind::Point { candela } => {
-                        TraceLight::Point { position: l.translation, flux: l.color * candela * four_pi }
-                    }
-                    LightKind::Spot { candela, inner, outer } => TraceLight::Spot {
+                    LightKind::Directional { lux } => TraceLight::Directional {
+                        direction: dir,
+                        illuminance: l.color * lux,
+                    },
+                    LightKind::Point { candela } => TraceLight::Point {
+                        position: l.translation,
+                        flux: l.color * candela * four_pi,
+                    },
+                    LightKind::Spot {
+                        candela,
+                        inner,
+                        outer,
+                    } => TraceLight::Spot {
                         position: l.translation,
                         direction: dir,
                         flux: l.color * candela * four_pi,
@@ -185,8 +206,13 @@ impl SceneDesc {
             })
             .collect();
         let camera = TraceCamera {
-            world_from_view: Affine3A::from_rotation_translation(self.camera.rotation, self.camera.translation),
-            projection: CameraProjection::Perspective { fov_y: self.camera.fov_y },
+            world_from_view: Affine3A::from_rotation_translation(
+                self.camera.rotation,
+                self.camera.translation,
+            ),
+            projection: CameraProjection::Perspective {
+                fov_y: self.camera.fov_y,
+            },
             width,
             height,
         };
@@ -196,7 +222,12 @@ impl SceneDesc {
 
 /// Grey diffuse floor material.
 fn diffuse(albedo: f32) -> MaterialParams {
-    MaterialParams { base_color: Vec3::splat(albedo), metallic: 0.0, perceptual_roughness: 0.9, ..Default::default() }
+    MaterialParams {
+        base_color: Vec3::splat(albedo),
+        metallic: 0.0,
+        perceptual_roughness: 0.9,
+        ..Default::default()
+    }
 }
 
 /// A clear dielectric (KHR_materials_transmission + ior + volume).
@@ -214,7 +245,12 @@ pub fn glass(ior: f32, thickness: f32) -> MaterialParams {
 
 /// A polished metal mirror of normal-incidence reflectance `f0`.
 pub fn mirror(f0: f32) -> MaterialParams {
-    MaterialParams { base_color: Vec3::splat(f0), metallic: 1.0, perceptual_roughness: 0.0, ..Default::default() }
+    MaterialParams {
+        base_color: Vec3::splat(f0),
+        metallic: 1.0,
+        perceptual_roughness: 0.0,
+        ..Default::default()
+    }
 }
 
 /// Illuminance of the directional lights of the test scenes, lux.
@@ -237,8 +273,18 @@ pub fn mirror_wall() -> SceneDesc {
     let wall = s.material("wall", diffuse(0.8), false);
     let m = s.material("mirror", mirror(0.9), false);
     s.add("floor", geometry::quad(10.0, 10.0), grey, Vec3::ZERO);
-    s.add("mirror", geometry::quad(1.0, 1.0), m, Vec3::new(0.0, 0.01, 0.0));
-    let w = s.add("wall", geometry::quad(5.0, 6.0), wall, Vec3::new(3.0, 2.5, 0.0));
+    s.add(
+        "mirror",
+        geometry::quad(1.0, 1.0),
+        m,
+        Vec3::new(0.0, 0.01, 0.0),
+    );
+    let w = s.add(
+        "wall",
+        geometry::quad(5.0, 6.0),
+        wall,
+        Vec3::new(3.0, 2.5, 0.0),
+    );
     // Quad normal +Y turned to -X.
     s.nodes[w].rotation = Quat::from_rotation_z(core::f32::consts::FRAC_PI_2);
     let a = MIRROR_WALL_INCIDENCE;
@@ -255,12 +301,21 @@ pub fn mirror_wall() -> SceneDesc {
 /// A 1 x 0.2 x 1 m slab of IOR 1.5 glass at y in [0.9, 1.1] under a 30-degree sun.
 pub fn glass_slab() -> SceneDesc {
     let eye = Vec3::new(0.6, 3.0, 3.0);
-    let cam = CameraDesc { translation: eye, rotation: look_at(eye, Vec3::new(0.6, 0.0, 0.0)), fov_y: 45f32.to_radians() };
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.6, 0.0, 0.0)),
+        fov_y: 45f32.to_radians(),
+    };
     let mut s = SceneDesc::new("glass_slab", cam);
     let grey = s.material("floor", diffuse(0.8), false);
     let g = s.material("glass", glass(1.5, 0.2), false);
     s.add("floor", geometry::quad(10.0, 10.0), grey, Vec3::ZERO);
-    s.add("slab", geometry::cuboid(Vec3::new(1.0, 0.2, 1.0)), g, Vec3::new(0.0, 1.0, 0.0));
+    s.add(
+        "slab",
+        geometry::cuboid(Vec3::new(1.0, 0.2, 1.0)),
+        g,
+        Vec3::new(0.0, 1.0, 0.0),
+    );
     let a = GLASS_SLAB_INCIDENCE;
     s.lights.push(LightDesc {
         name: "sun".into(),
@@ -280,12 +335,21 @@ pub const SPHERE_SEGMENTS: u32 = 96;
 /// A ball lens (IOR 1.5, radius 0.5 m, centre 1 m up) under a vertical sun, over a 40 m floor.
 pub fn glass_sphere() -> SceneDesc {
     let eye = Vec3::new(0.0, 2.2, 2.6);
-    let cam = CameraDesc { translation: eye, rotation: look_at(eye, Vec3::new(0.0, 0.3, 0.0)), fov_y: 45f32.to_radians() };
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.0, 0.3, 0.0)),
+        fov_y: 45f32.to_radians(),
+    };
     let mut s = SceneDesc::new("glass_sphere", cam);
     let grey = s.material("floor", diffuse(0.8), false);
     let g = s.material("glass", glass(1.5, 1.0), false);
     s.add("floor", geometry::quad(40.0, 40.0), grey, Vec3::ZERO);
-    s.add("ball", geometry::uv_sphere(SPHERE_RADIUS, SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2), g, Vec3::new(0.0, 1.0, 0.0));
+    s.add(
+        "ball",
+        geometry::uv_sphere(SPHERE_RADIUS, SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2),
+        g,
+        Vec3::new(0.0, 1.0, 0.0),
+    );
     s.lights.push(LightDesc {
         name: "sun".into(),
         kind: LightKind::Directional { lux: SUN_LUX },
@@ -299,7 +363,11 @@ pub fn glass_sphere() -> SceneDesc {
 /// A wavy water surface (IOR 1.33, slightly blue) 1 m above a pool floor, camera under water.
 pub fn pool() -> SceneDesc {
     let eye = Vec3::new(0.0, 0.7, 2.4);
-    let cam = CameraDesc { translation: eye, rotation: look_at(eye, Vec3::new(0.0, 0.0, 0.0)), fov_y: 50f32.to_radians() };
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.0, 0.0, 0.0)),
+        fov_y: 50f32.to_radians(),
+    };
     let mut s = SceneDesc::new("pool", cam);
     let tiles = s.material("pool_floor", diffuse(0.85), false);
     let water = s.material(
@@ -339,7 +407,11 @@ pub fn pool() -> SceneDesc {
 /// reflected light draws the cardioid on the floor.
 pub fn ring() -> SceneDesc {
     let eye = Vec3::new(0.0, 3.2, 1.6);
-    let cam = CameraDesc { translation: eye, rotation: look_at(eye, Vec3::new(0.0, 0.0, 0.0)), fov_y: 45f32.to_radians() };
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.0, 0.0, 0.0)),
+        fov_y: 45f32.to_radians(),
+    };
     let mut s = SceneDesc::new("ring", cam);
     let grey = s.material("floor", diffuse(0.8), false);
     let m = s.material("ring", mirror(0.95), true);
@@ -358,7 +430,11 @@ pub fn ring() -> SceneDesc {
 /// A floor and a sun, no caster: nothing of the plugin may run.
 pub fn empty() -> SceneDesc {
     let eye = Vec3::new(0.0, 3.0, 3.0);
-    let cam = CameraDesc { translation: eye, rotation: look_at(eye, Vec3::ZERO), fov_y: 45f32.to_radians() };
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::ZERO),
+        fov_y: 45f32.to_radians(),
+    };
     let mut s = SceneDesc::new("empty", cam);
     let grey = s.material("floor", diffuse(0.8), false);
     s.add("floor", geometry::quad(10.0, 10.0), grey, Vec3::ZERO);
@@ -374,5 +450,12 @@ pub fn empty() -> SceneDesc {
 
 /// Every test scene, in the order the report lists them.
 pub fn all() -> Vec<SceneDesc> {
-    vec![mirror_wall(), glass_slab(), glass_sphere(), pool(), ring(), empty()]
+    vec![
+        mirror_wall(),
+        glass_slab(),
+        glass_sphere(),
+        pool(),
+        ring(),
+        empty(),
+    ]
 }

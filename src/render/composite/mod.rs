@@ -7,20 +7,19 @@
 
 use bevy::asset::{embedded_asset, load_embedded_asset};
 use bevy::core_pipeline::FullscreenShader;
+use bevy::core_pipeline::core_3d::main_opaque_pass_3d;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::pbr::deferred::deferred_lighting;
-use bevy::core_pipeline::core_3d::main_opaque_pass_3d;
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
     BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, BlendComponent,
     BlendFactor, BlendOperation, BlendState, BufferInitDescriptor, BufferUsages,
-    CachedRenderPipelineId, ColorTargetState, ColorWrites, FragmentState,
-    PipelineCache, RenderPassDescriptor, RenderPipelineDescriptor,
-    ShaderStages, SpecializedRenderPipeline, SpecializedRenderPipelines, TextureFormat,
-    TextureSampleType, binding_types,
+    CachedRenderPipelineId, ColorTargetState, ColorWrites, FragmentState, PipelineCache,
+    RenderPassDescriptor, RenderPipelineDescriptor, ShaderStages, SpecializedRenderPipeline,
+    SpecializedRenderPipelines, TextureFormat, TextureSampleType, binding_types,
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewTarget};
@@ -71,8 +70,16 @@ impl SpecializedRenderPipeline for CompositePipeline {
     type Key = TextureFormat;
 
     fn specialize(&self, format: TextureFormat) -> RenderPipelineDescriptor {
-        let add = BlendComponent { src_factor: BlendFactor::One, dst_factor: BlendFactor::One, operation: BlendOperation::Add };
-        let keep = BlendComponent { src_factor: BlendFactor::Zero, dst_factor: BlendFactor::One, operation: BlendOperation::Add };
+        let add = BlendComponent {
+            src_factor: BlendFactor::One,
+            dst_factor: BlendFactor::One,
+            operation: BlendOperation::Add,
+        };
+        let keep = BlendComponent {
+            src_factor: BlendFactor::Zero,
+            dst_factor: BlendFactor::One,
+            operation: BlendOperation::Add,
+        };
         RenderPipelineDescriptor {
             label: Some("caustics:pipeline:composite".into()),
             layout: vec![self.layout.clone()],
@@ -81,7 +88,10 @@ impl SpecializedRenderPipeline for CompositePipeline {
                 shader: self.fragment.clone(),
                 targets: vec![Some(ColorTargetState {
                     format,
-                    blend: Some(BlendState { color: add, alpha: keep }),
+                    blend: Some(BlendState {
+                        color: add,
+                        alpha: keep,
+                    }),
                     write_mask: ColorWrites::ALL,
                 })],
                 ..default()
@@ -121,7 +131,9 @@ pub fn composite_caustics(
     mut ctx: RenderContext,
 ) {
     let (target, prepass, buffer, camera, caustics, id) = view.into_inner();
-    let (Some(render_pipeline), Some(gbuffer)) = (cache.get_render_pipeline(**id), prepass.deferred_view()) else {
+    let (Some(render_pipeline), Some(gbuffer)) =
+        (cache.get_render_pipeline(**id), prepass.deferred_view())
+    else {
         return;
     };
     if buffer.uploaded == 0 && caustics.reference.is_some() {
@@ -131,11 +143,13 @@ pub fn composite_caustics(
     let mut params = [0u8; 16];
     params[0..4].copy_from_slice(&camera.exposure.to_le_bytes());
     params[4..8].copy_from_slice(&(caustics.white_albedo as u32).to_le_bytes());
-    let uniform = ctx.render_device().create_buffer_with_data(&BufferInitDescriptor {
-        label: Some("caustics:buffer:composite_params"),
-        contents: &params,
-        usage: BufferUsages::UNIFORM,
-    });
+    let uniform = ctx
+        .render_device()
+        .create_buffer_with_data(&BufferInitDescriptor {
+            label: Some("caustics:buffer:composite_params"),
+            contents: &params,
+            usage: BufferUsages::UNIFORM,
+        });
     let bind_group = ctx.render_device().create_bind_group(
         "caustics:bind_group:composite",
         &cache.get_bind_group_layout(&pipeline.layout),
@@ -162,11 +176,16 @@ pub fn composite_caustics(
 
 pub(super) fn build(app: &mut App) {
     embedded_asset!(app, "composite.wgsl");
-    let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
     render_app
         .init_gpu_resource::<SpecializedRenderPipelines<CompositePipeline>>()
         .add_systems(RenderStartup, init_composite_pipeline)
-        .add_systems(Render, prepare_composite_pipelines.in_set(RenderSystems::Prepare))
+        .add_systems(
+            Render,
+            prepare_composite_pipelines.in_set(RenderSystems::Prepare),
+        )
         .add_systems(
             Core3d,
             composite_caustics
