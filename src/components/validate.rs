@@ -144,10 +144,14 @@ pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
     fixes
 }
 
+/// The query a validation system runs over.
+type Checked<'w, 's, C> =
+    Query<'w, 's, (Entity, &'static mut C, Option<&'static Name>), Changed<C>>;
+
 fn validate<C: Component<Mutability = bevy::ecs::component::Mutable> + Clone>(
     name: &'static str,
     sanitize: fn(&mut C) -> Vec<Fix>,
-) -> impl FnMut(Query<(Entity, &mut C, Option<&Name>), Changed<C>>, ResMut<CausticsWarnings>) {
+) -> impl FnMut(Checked<C>, ResMut<CausticsWarnings>) {
     move |mut q, mut warnings| {
         for (entity, mut c, n) in &mut q {
             let mut fixed = c.clone();

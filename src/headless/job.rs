@@ -58,6 +58,10 @@ pub struct RenderJob {
     /// Called once on the world right after the scene spawned and the camera was added: a
     /// hook to add or change entities (tests use it to feed invalid component values).
     pub hook: Option<fn(&mut World)>,
+    /// Called on the world at every measured frame with the frame's index (stress tests).
+    pub per_frame: Option<fn(&mut World, u32)>,
+    /// Give every light of the scene a `CausticLight` (default true).
+    pub mark_lights: bool,
 }
 
 impl Default for RenderJob {
@@ -75,6 +79,8 @@ impl Default for RenderJob {
             progress: false,
             ev100: None,
             hook: None,
+            per_frame: None,
+            mark_lights: true,
         }
     }
 }
@@ -222,7 +228,10 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         .insert_resource(shared.clone())
         .init_resource::<Phase>()
         .add_systems(Startup, start)
-        .add_systems(Update, (drive, mark_lights));
+        .add_systems(Update, drive);
+    if job.mark_lights {
+        app.add_systems(Update, mark_lights);
+    }
     if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
         let s = shared.clone();
         render_app.add_systems(RenderStartup, move |info: Res<RenderAdapterInfo>| {
@@ -455,6 +464,7 @@ fn drive(
             if !job.0.window {
                 main.insert(RenderTarget::Image(handles.target.clone().into()));
             }
+
             if let Some(twin) = &handles.twin {
                 commands.spawn((
                     TwinCamera,
@@ -492,7 +502,9 @@ fn drive(
                     *phase = Phase::Measuring(0);
                 }
                 _ => {
-                    if let Some(p) = progress.filter(|_| job.0.progress && frames.0 % 60 == 0) {
+                    if let Some(p) =
+                        progress.filter(|_| job.0.progress && frames.0.is_multiple_of(60))
+                    {
                         eprintln!(
                             "bevy_caustics: reference photons traced: {:.0}% of {}",
                             p.fraction() * 100.0,
@@ -503,6 +515,9 @@ fn drive(
             }
         }
         Phase::Measuring(n) => {
+            if let Some(f) = job.0.per_frame {
+                commands.queue(move |world: &mut World| f(world, n));
+            }
             let mut o = shared.0.lock().expect("state");
             // Diagnostics arrive a few frames late: sample after a warm-up.
             if n >= 3 {

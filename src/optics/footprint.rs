@@ -75,7 +75,7 @@ pub fn ortho_footprint_area(pixel_w: f32, pixel_h: f32, cos_surface: f32) -> f32
 /// area; a non-finite flux gives zero.
 #[inline]
 pub fn irradiance_from_flux(flux: Vec3, area: f32) -> Vec3 {
-    if !(area.is_finite() && area > 0.0) || !flux.is_finite() {
+    if !(area.is_finite() && area > 0.0 && flux.is_finite()) {
         return Vec3::ZERO;
     }
     let e = flux / area;

@@ -84,6 +84,8 @@ pub struct TraceStats {
     pub normal_fallbacks: u64,
     /// Guard: footprints clamped at grazing view angles.
     pub grazing_clamps: u64,
+    /// Total internal reflections (Fresnel reflectance 1 inside a dielectric).
+    pub tir_events: u64,
 }
 
 impl TraceStats {
@@ -105,6 +107,7 @@ impl TraceStats {
         self.nan_guards += o.nan_guards;
         self.normal_fallbacks += o.normal_fallbacks;
         self.grazing_clamps += o.grazing_clamps;
+        self.tir_events += o.tir_events;
     }
 }
 
@@ -484,6 +487,10 @@ fn trace_photon(
                 let eta = if entering { 1.0 / ior } else { ior };
                 let cos_i = -d.dot(ns_f);
                 let r = optics::fresnel_dielectric(cos_i, eta);
+                if r >= 1.0 {
+                    // Stiff suite "total internal reflection paths": counted, then reflected.
+                    stats.tir_events += 1;
+                }
                 if rng.next_f32() < r {
                     let mut dr = optics::reflect(d, ns_f);
                     if dr.dot(ng_f) <= 0.0 {
@@ -537,7 +544,7 @@ fn deposit(
 ) {
     let (to_eye, dist) = map.towards_eye(p);
     // The camera must look at the lit side of the surface.
-    if !(dist > 0.0) || to_eye.dot(n_f) <= 0.0 {
+    if dist.is_nan() || dist <= 0.0 || to_eye.dot(n_f) <= 0.0 {
         return;
     }
     let Some((pixel, area)) = map.pixel(p, n_f, stats) else {

@@ -80,10 +80,10 @@ impl Blas {
             let [a, b, c] = idx.map(|k| geometry.positions[k as usize]);
             let (e1, e2) = (b - a, c - a);
             let area2 = e1.cross(e2).length();
-            if !(a.is_finite() && b.is_finite() && c.is_finite())
-                || !(area2 > 0.0)
-                || !area2.is_finite()
-            {
+            // Stiff suite "degenerate and zero-area triangles": skipped and counted.
+            let valid =
+                a.is_finite() && b.is_finite() && c.is_finite() && area2.is_finite() && area2 > 0.0;
+            if !valid {
                 degenerate += 1;
                 continue;
             }
@@ -199,7 +199,8 @@ pub fn intersect_triangle(
     let p = d.cross(e2);
     let det = e1.dot(p);
     let scale = e1.length() * p.length();
-    if !(det.abs() > 1e-12 * scale) || scale == 0.0 {
+    // Parallel to the plane (or a NaN determinant): no hit.
+    if det.is_nan() || det.abs() <= 1e-12 * scale || scale == 0.0 {
         return None;
     }
     let inv = 1.0 / det;

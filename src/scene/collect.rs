@@ -38,6 +38,8 @@ pub struct CausticsScene {
     pub blas_builds: u64,
     /// Triangles skipped as degenerate, over all BLAS built.
     pub degenerate_triangles: u64,
+    /// BLAS currently cached (one per live mesh asset in use).
+    pub cached_blas: usize,
 }
 
 impl CausticsScene {
@@ -246,7 +248,10 @@ fn gather_scene(
             (Some(o), _) => override_surface(o),
             (None, Some(m)) => {
                 let params = material_params(m);
-                if m.specular_transmission > 0.0 && !(m.ior >= 1.0) && warned.insert(entity) {
+                if m.specular_transmission > 0.0
+                    && (m.ior.is_nan() || m.ior < 1.0)
+                    && warned.insert(entity)
+                {
                     warnings.report(
                         entity,
                         name,
@@ -314,6 +319,10 @@ fn gather_scene(
         };
         lights.push((entity, l));
     }
+    // Drop the BLAS of meshes no instance uses any more (their assets may live on).
+    let used: HashSet<AssetId<Mesh>> = meshes_q.iter().map(|q| q.1.0.id()).collect();
+    cache.0.retain(|id, _| used.contains(id));
+    scene.cached_blas = cache.0.len();
     scene.tlas = Arc::new(Tlas::build(instances));
     scene.lights = lights;
     scene.casters = casters;

@@ -22,7 +22,7 @@ pub fn write_gltf(scene: &SceneDesc, dir: &Path) -> std::io::Result<()> {
     let mut accessors = Vec::<Value>::new();
     let mut meshes = Vec::<Value>::new();
     let mut view = |bin: &mut Vec<u8>, start: usize, target: u32| -> usize {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         views.push(json!({"buffer": 0, "byteOffset": start, "byteLength": bin.len() - start, "target": target}));
