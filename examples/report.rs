@@ -55,7 +55,7 @@ fn real_main() -> Result<(), String> {
     .map(String::from)
     .to_vec();
     let mut techniques = vec![CausticsTechnique::Reference];
-    let mut out = root.clone();
+    let mut out = root.join("report");
     let mut size = 128u32;
     let mut i = 0;
     while i < args.len() {
@@ -123,7 +123,7 @@ fn real_main() -> Result<(), String> {
                     quality: format!("{photons} photons/light"),
                     photons: report.photons_traced,
                     cpu_ms: report.reference_seconds * 1e3,
-                    gpu_ms: report.pass_ms.values().sum(),
+                    gpu_ms: report.pass_ms.values().fold(0.0, |a, b| a + b),
                     metrics: compare(&image, &reference, None).ok_or("size mismatch")?,
                 });
             }
@@ -143,6 +143,16 @@ fn real_main() -> Result<(), String> {
     let _ = writeln!(
         md,
         "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores); `gpu ms` is the median GPU time of the caustics passes (the composite) over 8 measured frames.\n"
+    );
+    let _ = writeln!(
+        md,
+        "The converged image has noise of its own: at {CONVERGED_PHOTONS} photons its RMSE is about 1/sqrt({}) of the last sweep point's, so that point's error is overstated by about {:.0} %.\n",
+        CONVERGED_PHOTONS / sweep[sweep.len() - 1],
+        ((1.0 + sweep[sweep.len() - 1] as f64 / CONVERGED_PHOTONS as f64).sqrt() - 1.0) * 100.0
+    );
+    let _ = writeln!(
+        md,
+        "A scene whose technique dispatches no pass (no caster or no caustic light) shows 0 photons and 0 ms.\n"
     );
     let _ = writeln!(md, "Regenerate: `cargo run --release --example report`.\n");
     for scene in &scenes {

@@ -744,182 +744,30 @@ fn scene_gathering_rebuilds_only_what_changed() {
 
 // ---------------------------------------------------------------- stiff and extreme cases
 
-/// A case of the stiff-and-extreme suite: a scene variant and what must hold beyond "finite,
-/// no panic, energy never created".
-struct Stiff {
-    name: &'static str,
-    scene: scenes::SceneDesc,
-    photons: u64,
-    size: u32,
-    check: fn(&bevy_caustics::reference::TraceOutput),
-}
-
-fn slab_at(deg: f32) -> scenes::SceneDesc {
-    let mut d = scenes::glass_slab();
-    let a = deg.to_radians();
-    d.lights[0].rotation = scenes::shine_along(Vec3::new(a.sin(), -a.cos(), 0.0));
-    d
-}
-
-fn slab_ior(ior: f32) -> scenes::SceneDesc {
-    let mut d = scenes::glass_slab();
-    d.materials[1].params.ior = ior;
-    d
-}
-
-fn scaled(mut d: scenes::SceneDesc, s: f32) -> scenes::SceneDesc {
-    for n in &mut d.nodes {
-        n.translation *= s;
-        n.scale *= s;
-    }
-    d.camera.translation *= s;
-    d
-}
-
-fn gem() -> scenes::SceneDesc {
-    // A faceted IOR 2.4 "diamond" (a coarse sphere): many total internal reflections.
-    let mut d = scenes::glass_sphere();
-    d.meshes[1] = std::sync::Arc::new(scenes::geometry::uv_sphere(0.5, 8, 4));
-    d.materials[1].params.ior = 2.4;
-    d
-}
-
-fn with_degenerate_caster() -> scenes::SceneDesc {
-    let mut d = scenes::glass_slab();
-    let mut g = scenes::geometry::cuboid(Vec3::splat(0.3));
-    let n = g.positions.len() as u32;
-    g.positions.push(Vec3::ZERO);
-    g.positions.push(Vec3::splat(f32::NAN));
-    g.normals.as_mut().unwrap().extend([Vec3::Y, Vec3::Y]);
-    // Zero-area, collinear, NaN-vertex and out-of-range triangles.
-    g.indices
-        .extend([[n, n, n], [0, 0, 1], [0, 1, n + 1], [0, 1, 999]]);
-    d.meshes.push(std::sync::Arc::new(g));
-    d.nodes.push(scenes::NodeDesc {
-        name: "broken".into(),
-        mesh: d.meshes.len() - 1,
-        material: 1,
-        translation: Vec3::new(0.0, 1.6, 0.0),
-        rotation: glam::Quat::IDENTITY,
-        scale: Vec3::ONE,
-    });
-    d
-}
-
-fn far_camera() -> scenes::SceneDesc {
-    let mut d = scenes::glass_sphere();
-    let target = Vec3::new(0.0, 0.3, 0.0);
-    let dir = (d.camera.translation - target).normalize();
-    d.camera.translation = target + dir * 1e4;
-    d.camera.rotation = scenes::look_at(d.camera.translation, target);
-    d.camera.fov_y = 0.0002;
-    d
-}
-
-fn stiff_cases() -> Vec<Stiff> {
-    let mut v = Vec::new();
-    for (name, deg) in [
-        ("light at 0 degrees", 0.0),
-        ("light at 45 degrees", 45.0),
-        ("light at 89 degrees", 89.0),
-        ("light at 89.9 degrees", 89.9),
-    ] {
-        v.push(Stiff {
-            name,
-            scene: slab_at(deg),
-            photons: 40_000,
-            size: 32,
-            check: |_| {},
-        });
-    }
-    v.push(Stiff {
-        name: "IOR 1.0 (only transmitted light)",
-        scene: slab_ior(1.0),
-        photons: 40_000,
-        size: 32,
-        check: |o| {
+/// What each stiff case must show beyond "finite, no panic, energy never created".
+fn stiff_check(name: &str, o: &bevy_caustics::reference::TraceOutput) {
+    match name {
+        "IOR 1.0 (only transmitted light)" => {
             assert!(
                 o.stats.flux_per_path.keys().all(|(r, _)| *r == 0),
                 "IOR 1 reflected light"
             );
             assert_eq!(o.stats.tir_events, 0);
-        },
-    });
-    for (name, ior) in [
-        ("IOR 1.33", 1.33),
-        ("IOR 1.5", 1.5),
-        ("IOR 2.4", 2.4),
-        ("IOR 4.0", 4.0),
-    ] {
-        v.push(Stiff {
-            name,
-            scene: slab_ior(ior),
-            photons: 40_000,
-            size: 32,
-            check: |_| {},
-        });
+        }
+        "total internal reflection paths (IOR 2.4 gem)" => {
+            assert!(o.stats.tir_events > 100, "no TIR in the gem")
+        }
+        "caster 1e-3 m" | "caster 1e4 m" => assert!(o.stats.photons_deposited > 1000),
+        "camera 1e4 m away" => assert!(o.stats.photons_in_view > 100),
+        "zero photons" => assert_eq!(o.image.sum(), glam::DVec3::ZERO),
+        "a million photons in one small region" => assert!(o.stats.photons_in_view > 100_000),
+        _ => {}
     }
-    v.push(Stiff {
-        name: "total internal reflection paths (IOR 2.4 gem)",
-        scene: gem(),
-        photons: 40_000,
-        size: 32,
-        check: |o| {
-            assert!(
-                o.stats.tir_events > 100,
-                "no TIR in the gem: {}",
-                o.stats.tir_events
-            )
-        },
-    });
-    v.push(Stiff {
-        name: "degenerate and zero-area triangles",
-        scene: with_degenerate_caster(),
-        photons: 40_000,
-        size: 32,
-        check: |_| {},
-    });
-    v.push(Stiff {
-        name: "caster 1e-3 m",
-        scene: scaled(scenes::glass_slab(), 1e-3),
-        photons: 40_000,
-        size: 32,
-        check: |o| assert!(o.stats.photons_deposited > 1000),
-    });
-    v.push(Stiff {
-        name: "caster 1e4 m",
-        scene: scaled(scenes::glass_slab(), 1e4),
-        photons: 40_000,
-        size: 32,
-        check: |o| assert!(o.stats.photons_deposited > 1000),
-    });
-    v.push(Stiff {
-        name: "camera 1e4 m away",
-        scene: far_camera(),
-        photons: 40_000,
-        size: 32,
-        check: |o| assert!(o.stats.photons_in_view > 100),
-    });
-    v.push(Stiff {
-        name: "zero photons",
-        scene: scenes::glass_sphere(),
-        photons: 0,
-        size: 32,
-        check: |o| assert_eq!(o.image.sum(), glam::DVec3::ZERO),
-    });
-    v.push(Stiff {
-        name: "a million photons in one small region",
-        scene: scenes::glass_sphere(),
-        photons: 1 << 20,
-        size: 4,
-        check: |o| assert!(o.stats.photons_in_view > 100_000),
-    });
-    v
 }
 
 #[test]
 fn stiff_and_extreme_cases_reference() {
-    for case in stiff_cases() {
+    for case in scenes::stiff::cases() {
         let (tlas, lights, cam) = case.scene.to_trace(case.size, case.size);
         let out = trace(
             &tlas,
@@ -957,7 +805,7 @@ fn stiff_and_extreme_cases_reference() {
             s.flux_deposited.y,
             s.flux_emitted.y
         );
-        (case.check)(&out);
+        stiff_check(case.name, &out);
     }
 }
 

@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+/// Guard (stiff suite: "light at 89.9 degrees", "camera 1e4 m away").
 /// Smallest surface cosine a footprint is computed with: at more grazing view angles the
 /// footprint is clamped to `1 / MIN_SURFACE_COS` times the perpendicular area (a 1e4x
 /// stretch), so irradiance never divides by zero. Callers count the clamps.

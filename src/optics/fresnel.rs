@@ -25,7 +25,7 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
         1.0
     };
     if eta == 1.0 {
-        // No interface (IOR 1): nothing reflects, even at grazing incidence where rounding
+        // Guard (stiff suite: "IOR 1.0"). No interface (IOR 1): nothing reflects, even at grazing incidence where rounding
         // would otherwise report total internal reflection.
         return 0.0;
     }

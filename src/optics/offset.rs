@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+/// Guard (stiff suite: "caster 1e-3 m", "caster 1e4 m").
 /// Offset a surface point `p` along the geometric normal `n` (pointing to the side the new ray
 /// leaves on) so that the new ray cannot re-hit the surface it starts on.
 ///

@@ -130,6 +130,7 @@ fn make_emitter(light: &TraceLight, tlas: &Tlas, photons: u64) -> Option<Emitter
     let center = (lo + hi) * 0.5;
     let radius = ((hi - lo) * 0.5).length().max(1e-9);
     let scene_radius = ((shi - slo) * 0.5).length() + (center - (slo + shi) * 0.5).length();
+    // Guard (stiff suite: "zero photons"): no division by zero; nothing is emitted anyway.
     let n = photons.max(1) as f32;
     Some(match *light {
         TraceLight::Directional {
@@ -470,6 +471,8 @@ fn trace_photon(
                 let cos_i = -d.dot(ns_f);
                 flux *= optics::fresnel_schlick(cos_i, f0);
                 let mut r = optics::reflect(d, ns_f);
+                // Guard (stiff suite: "a million photons in one small region", faceted
+                // meshes): a smooth normal must not send light through the surface.
                 if r.dot(ng_f) <= 0.0 {
                     stats.normal_fallbacks += 1;
                     r = optics::reflect(d, ng_f);
@@ -504,6 +507,7 @@ fn trace_photon(
                     let dt = if thin {
                         Some(d)
                     } else {
+                        // Guard (stiff suite: "total internal reflection paths (IOR 2.4 gem)").
                         optics::refract(d, ns_f, eta)
                             .filter(|t| t.dot(ng_f) < 0.0)
                             .or_else(|| {

@@ -157,7 +157,7 @@ fn prepare_caustics_buffers(
     }
 }
 
-/// Copy a CPU image into a caustics buffer (non-finite values become 0).
+/// Copy a CPU image into a caustics buffer. Guard: non-finite values become 0.
 pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
     let mut bytes = Vec::with_capacity(image.data.len() * 16);
     for v in &image.data {

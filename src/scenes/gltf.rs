@@ -37,7 +37,8 @@ pub fn write_gltf(scene: &SceneDesc, dir: &Path) -> std::io::Result<()> {
         let start = bin.len();
         push_f32s(&mut bin, m.positions.iter().flat_map(|p| p.to_array()));
         let pv = view(&mut bin, start, 34962);
-        let (lo, hi) = m.positions.iter().fold(
+        // glTF needs finite bounds: non-finite positions (stiff cases) stay in the buffer.
+        let (lo, hi) = m.positions.iter().filter(|p| p.is_finite()).fold(
             (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
             |(a, b), p| (a.min(*p), b.max(*p)),
         );

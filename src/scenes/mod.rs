@@ -4,6 +4,7 @@
 
 pub mod geometry;
 pub mod gltf;
+pub mod stiff;
 
 use std::sync::Arc;
 

@@ -39,7 +39,8 @@ fn fragment(in: FullscreenVertexOutput) -> @location(0) vec4<f32> {
         albedo = vec3(0.0);
     }
     var l = albedo * INV_PI * e * params.exposure;
-    // Guard: a NaN or infinity in the buffer must not poison the frame.
+    // Guard (stiff suite: every case's GPU readback): a NaN or infinity in the buffer must
+    // not poison the frame.
     let finite = all(l == l) && all(abs(l) <= vec3(3.0e38));
     l = select(vec3(0.0), min(l, vec3(MAX_RADIANCE)), finite);
     return vec4(l, 0.0);
