@@ -361,9 +361,16 @@ fn region_mean(
     ((sum / count.max(1) as f64) as f32, count)
 }
 
-#[test]
-fn reference_mirror_wall_closed_form() {
-    let desc = scenes::mirror_wall();
+/// Trace `desc` and compare the mean irradiance over the pixels that see `region` of the plane
+/// `n . x = d` with the closed form `expect`: within 2 %.
+fn check_closed_form(
+    desc: &scenes::SceneDesc,
+    seed: u64,
+    n: Vec3,
+    d: f32,
+    region: impl Fn(Vec3) -> bool,
+    expect: f32,
+) {
     let (tlas, lights, cam) = desc.to_trace(128, 128);
     let out = trace(
         &tlas,
@@ -371,22 +378,17 @@ fn reference_mirror_wall_closed_form() {
         &cam,
         &TraceSettings {
             photons_per_light: N,
-            seed: 3,
+            seed,
             ..Default::default()
         },
         None,
     );
     assert!(out.image.all_finite());
-    let a = scenes::MIRROR_WALL_INCIDENCE;
-    // The reflected beam keeps E_perp * R(θ); on the wall (normal -X) it arrives at cos = sin 45.
-    let r = fresnel_schlick(a.cos(), Vec3::splat(0.9)).x;
-    let expect = scenes::SUN_LUX * r * a.sin();
-    let (mean, px) = region_mean(&out.image, &cam, Vec3::NEG_X, -3.0, |p| {
-        (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25
-    });
+    let (mean, px) = region_mean(&out.image, &cam, n, d, region);
     let err = mean / expect - 1.0;
     println!(
-        "mirror_wall: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %",
+        "{}: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %",
+        desc.name,
         err * 100.0
     );
     assert!(px > 200);
@@ -394,34 +396,23 @@ fn reference_mirror_wall_closed_form() {
 }
 
 #[test]
+fn reference_mirror_wall_closed_form() {
+    let a = scenes::MIRROR_WALL_INCIDENCE;
+    // The reflected beam keeps E_perp * R(θ); on the wall (normal -X) it arrives at cos = sin 45.
+    let r = fresnel_schlick(a.cos(), Vec3::splat(0.9)).x;
+    let expect = scenes::SUN_LUX * r * a.sin();
+    let region = |p: Vec3| (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25;
+    check_closed_form(&scenes::mirror_wall(), 3, Vec3::NEG_X, -3.0, region, expect);
+}
+
+#[test]
 fn reference_glass_slab_closed_form() {
-    let desc = scenes::glass_slab();
-    let (tlas, lights, cam) = desc.to_trace(128, 128);
-    let out = trace(
-        &tlas,
-        &lights,
-        &cam,
-        &TraceSettings {
-            photons_per_light: N,
-            seed: 5,
-            ..Default::default()
-        },
-        None,
-    );
     let a = scenes::GLASS_SLAB_INCIDENCE;
     // Two interfaces plus every even number of internal reflections: T^2 / (1 - R^2).
     let r = fresnel_dielectric(a.cos(), 1.0 / 1.5);
     let expect = scenes::SUN_LUX * a.cos() * (1.0 - r) / (1.0 + r);
-    let (mean, px) = region_mean(&out.image, &cam, Vec3::Y, 0.0, |p| {
-        (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3
-    });
-    let err = mean / expect - 1.0;
-    println!(
-        "glass_slab: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %",
-        err * 100.0
-    );
-    assert!(px > 200);
-    assert!(err.abs() < 0.02);
+    let region = |p: Vec3| (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3;
+    check_closed_form(&scenes::glass_slab(), 5, Vec3::Y, 0.0, region, expect);
 }
 
 #[test]
@@ -829,4 +820,20 @@ fn volumes_at_the_limits_validate() {
     };
     assert_eq!(sanitize_volume(&mut too_many).len(), 1);
     assert_eq!(too_many.slabs, 64);
+}
+
+#[test]
+fn capability_gate_lists_what_is_missing() {
+    use bevy::render::render_resource::{DownlevelFlags, WgpuLimits};
+    let ok = bevy_caustics::missing_gpu_capabilities(DownlevelFlags::all(), &WgpuLimits::default());
+    assert!(ok.is_empty(), "{ok:?}");
+    let limits = WgpuLimits {
+        max_storage_buffers_per_shader_stage: 4,
+        max_storage_textures_per_shader_stage: 0,
+        ..WgpuLimits::default()
+    };
+    let missing = bevy_caustics::missing_gpu_capabilities(DownlevelFlags::empty(), &limits);
+    assert_eq!(missing.len(), 3, "{missing:?}");
+    assert!(missing[0].contains("COMPUTE_SHADERS"));
+    assert!(missing[1].contains("max_storage_buffers_per_shader_stage"));
 }

@@ -525,3 +525,196 @@ fn stiff_and_extreme_cases_gpu() {
         assert!(report.caustics.unwrap().all_finite(), "{}", case.name);
     }
 }
+
+/// The WGSL closest-hit traversal (`src/render/bvh.wgsl`) against the CPU BVH on thousands of
+/// random rays through three scenes: same instance and triangle (or a tie at the same
+/// distance on a shared edge), t within 1e-4 relative. Runs as a plain wgpu compute dispatch.
+#[test]
+fn wgsl_bvh_matches_cpu_bvh() {
+    use bevy_caustics::optics::{Pcg32, uniform_sphere};
+    use bevy_caustics::scene::gpu::GpuBvh;
+    use wgpu::util::DeviceExt;
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let kernel = r#"
+@group(0) @binding(5) var<storage, read> rays: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> hits: array<vec4<u32>>;
+@compute @workgroup_size(64)
+fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&hits) { return; }
+    let h = bvh_closest_hit(rays[2u * i].xyz, rays[2u * i + 1u].xyz, 0.0, BVH_FAR);
+    hits[i] = vec4(bitcast<u32>(h.t), h.instance, h.triangle, 0u);
+}
+"#;
+    let src = format!("{}\n{kernel}", include_str!("../src/render/bvh.wgsl"));
+    let instance = wgpu::Instance::default();
+    let adapter =
+        bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+            .expect("adapter");
+    let (device, queue) =
+        bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
+            .expect("device");
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("bvh_test"),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("bvh_test"),
+        layout: None,
+        module: &module,
+        entry_point: Some("trace_rays"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let f4 = |v: &[[f32; 4]]| -> Vec<u8> {
+        let mut b: Vec<u8> = v
+            .iter()
+            .flat_map(|x| x.iter().flat_map(|c| c.to_le_bytes()))
+            .collect();
+        if b.is_empty() {
+            b.resize(16, 0);
+        }
+        b
+    };
+    let mut total = 0;
+    for desc in [
+        bevy_caustics::scenes::glass_sphere(),
+        bevy_caustics::scenes::pool(),
+        bevy_caustics::scenes::ring(),
+    ] {
+        let (tlas, _, _) = desc.to_trace(8, 8);
+        let gpu = GpuBvh::from_tlas(&tlas);
+        let mut rng = Pcg32::new(17, total);
+        let n = 4096usize;
+        let rays: Vec<(glam::Vec3, glam::Vec3)> = (0..n)
+            .map(|_| {
+                let o = glam::Vec3::new(
+                    rng.next_f32() * 4.0 - 2.0,
+                    rng.next_f32() * 2.5,
+                    rng.next_f32() * 4.0 - 2.0,
+                );
+                (o, uniform_sphere(rng.next_vec2()))
+            })
+            .collect();
+        let ray_data: Vec<[f32; 4]> = rays
+            .iter()
+            .flat_map(|(o, d)| [[o.x, o.y, o.z, 0.0], [d.x, d.y, d.z, 0.0]])
+            .collect();
+        let prims: Vec<u8> = gpu
+            .tlas_prims
+            .iter()
+            .flat_map(|p| p.to_le_bytes())
+            .chain([0u8; 4])
+            .collect();
+        let storage = |label: &str, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let bufs = [
+            storage("nodes", &f4(&gpu.nodes)),
+            storage("triangles", &f4(&gpu.triangles)),
+            storage("instances", &gpu.instance_bytes()),
+            storage("tlas_nodes", &f4(&gpu.tlas_nodes)),
+            storage("tlas_prims", &prims),
+            storage("rays", &f4(&ray_data)),
+        ];
+        let size = (n * 16) as u64;
+        let hits = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hits"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let read = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut entries: Vec<wgpu::BindGroupEntry> = bufs
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: hits.as_entire_binding(),
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let mut enc = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups((n as u32).div_ceil(64), 1, 1);
+        }
+        enc.copy_buffer_to_buffer(&hits, 0, &read, 0, size);
+        queue.submit([enc.finish()]);
+        read.slice(..)
+            .map_async(wgpu::MapMode::Read, |r| r.expect("map"));
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("poll");
+        let data = read.slice(..).get_mapped_range().to_vec();
+        let (mut hit_count, mut ties) = (0, 0);
+        for (i, (o, d)) in rays.iter().enumerate() {
+            let w = |k: usize| {
+                u32::from_le_bytes(data[i * 16 + 4 * k..i * 16 + 4 * k + 4].try_into().unwrap())
+            };
+            let (gt, ginst, gtri) = (f32::from_bits(w(0)), w(1), w(2));
+            match tlas.closest_hit(*o, *d, 0.0, f32::INFINITY, |_| false) {
+                Some(h) => {
+                    hit_count += 1;
+                    assert_ne!(
+                        ginst,
+                        u32::MAX,
+                        "{}: ray {i} hit on the CPU, missed on the GPU",
+                        desc.name
+                    );
+                    assert!(
+                        (gt - h.t).abs() <= 1e-4 * h.t.max(1.0),
+                        "{}: ray {i}: t {gt} vs {}",
+                        desc.name,
+                        h.t
+                    );
+                    if (ginst, gtri) != (h.instance, h.triangle) {
+                        // A shared edge: both triangles are hit at the same distance.
+                        assert!(
+                            (gt - h.t).abs() <= 1e-6 * h.t.max(1.0),
+                            "{}: ray {i}: ({ginst},{gtri}) vs ({},{})",
+                            desc.name,
+                            h.instance,
+                            h.triangle
+                        );
+                        ties += 1;
+                    }
+                }
+                None => assert_eq!(
+                    ginst,
+                    u32::MAX,
+                    "{}: ray {i} missed on the CPU, hit on the GPU at {gt}",
+                    desc.name
+                ),
+            }
+        }
+        println!(
+            "{}: {n} rays, {hit_count} hits, {ties} edge ties, all match",
+            desc.name
+        );
+        assert!(hit_count > n / 4);
+        total += 1;
+    }
+}

@@ -443,7 +443,12 @@ fn trace_photon(
         let ng_f = if d.dot(ng) > 0.0 { -ng } else { ng };
         let ns_f = if d.dot(ns) > 0.0 { -ns } else { ns };
         let specular = reflections + refractions;
-        match tlas.instances[hit.instance as usize].surface {
+        let surface = tlas.instances[hit.instance as usize].surface;
+        if surface.is_specular() && specular >= settings.max_specular_events {
+            stats.photons_max_depth += 1;
+            return;
+        }
+        match surface {
             Surface::Diffuse { .. } => {
                 if specular == 0 {
                     stats.photons_direct += 1;
@@ -464,28 +469,12 @@ fn trace_photon(
                 return;
             }
             Surface::Conductor { f0 } => {
-                if specular >= settings.max_specular_events {
-                    stats.photons_max_depth += 1;
-                    return;
-                }
-                let cos_i = -d.dot(ns_f);
-                flux *= optics::fresnel_schlick(cos_i, f0);
-                let mut r = optics::reflect(d, ns_f);
-                // Guard (stiff suite: "a million photons in one small region", faceted
-                // meshes): a smooth normal must not send light through the surface.
-                if r.dot(ng_f) <= 0.0 {
-                    stats.normal_fallbacks += 1;
-                    r = optics::reflect(d, ng_f);
-                }
-                d = r;
+                flux *= optics::fresnel_schlick(-d.dot(ns_f), f0);
+                d = reflect_guarded(d, ns_f, ng_f, stats);
                 o = optics::offset_ray_origin(p, ng_f, scene_scale);
                 reflections += 1;
             }
             Surface::Dielectric { ior, thin, .. } => {
-                if specular >= settings.max_specular_events {
-                    stats.photons_max_depth += 1;
-                    return;
-                }
                 let entering = d.dot(ng) < 0.0;
                 let eta = if entering { 1.0 / ior } else { ior };
                 let cos_i = -d.dot(ns_f);
@@ -495,12 +484,7 @@ fn trace_photon(
                     stats.tir_events += 1;
                 }
                 if rng.next_f32() < r {
-                    let mut dr = optics::reflect(d, ns_f);
-                    if dr.dot(ng_f) <= 0.0 {
-                        stats.normal_fallbacks += 1;
-                        dr = optics::reflect(d, ng_f);
-                    }
-                    d = dr;
+                    d = reflect_guarded(d, ns_f, ng_f, stats);
                     o = optics::offset_ray_origin(p, ng_f, scene_scale);
                     reflections += 1;
                 } else {
@@ -533,6 +517,19 @@ fn trace_photon(
             }
         }
     }
+}
+
+/// Mirror reflection about the shading normal `ns_f`, unless that would send the light into
+/// the surface (smooth normals on a coarse mesh): then about the geometric normal `ng_f`
+/// (both facing the incoming light). Guard (stiff suite: "a million photons in one small
+/// region", "total internal reflection paths (IOR 2.4 gem)"): counted in `normal_fallbacks`.
+fn reflect_guarded(d: Vec3, ns_f: Vec3, ng_f: Vec3, stats: &mut TraceStats) -> Vec3 {
+    let r = optics::reflect(d, ns_f);
+    if r.dot(ng_f) > 0.0 {
+        return r;
+    }
+    stats.normal_fallbacks += 1;
+    optics::reflect(d, ng_f)
 }
 
 #[allow(clippy::too_many_arguments)]

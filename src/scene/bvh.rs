@@ -138,6 +138,17 @@ impl Blas {
         }
     }
 
+    /// The BVH2 nodes (obvhs layout: inner nodes have `prim_count == 0` and their children at
+    /// `first_index` and `first_index + 1`; leaves index [`Blas::triangles_bvh_order`]).
+    pub fn nodes(&self) -> &[obvhs::bvh2::node::Bvh2Node] {
+        self.bvh.as_ref().map_or(&[], |b| &b.nodes)
+    }
+
+    /// Triangles in BVH order as `(v0, v1 - v0, v2 - v0, index in the mesh)`.
+    pub fn triangles_bvh_order(&self) -> impl Iterator<Item = (Vec3, Vec3, Vec3, u32)> + '_ {
+        self.tris.iter().map(|t| (t.v0, t.e1, t.e2, t.source))
+    }
+
     /// Number of triangles in the BVH.
     pub fn triangle_count(&self) -> usize {
         self.tris.len()
@@ -353,6 +364,14 @@ impl Tlas {
             }
         });
         found
+    }
+
+    /// The TLAS nodes (same layout as [`Blas::nodes`]) and the instance index of each leaf
+    /// primitive slot.
+    pub fn nodes_and_prims(&self) -> (&[obvhs::bvh2::node::Bvh2Node], &[u32]) {
+        self.bvh
+            .as_ref()
+            .map_or((&[], &[]), |b| (&b.nodes, &b.primitive_indices))
     }
 
     /// World geometric normal and shading normal at a hit (unit; same side as the mesh's

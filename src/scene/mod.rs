@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod collect;
+pub mod gpu;
 pub mod model;
 
 pub use bvh::{Blas, Hit, Instance, MeshGeometry, Tlas};

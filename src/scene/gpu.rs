@@ -1,0 +1,128 @@
+//! The two-level BVH flattened into plain arrays for the GPU (the WGSL twin of
+//! [`super::Tlas::closest_hit`] is `src/render/bvh.wgsl`).
+//!
+//! Layout (std430, everything 16-byte aligned):
+//! - `nodes`: two `vec4<f32>` per node, `(min.xyz, bitcast<f32>(prim_count))` and
+//!   `(max.xyz, bitcast<f32>(first_index))`; every BLAS's nodes follow each other, child and
+//!   leaf indices are made global.
+//! - `triangles`: three `vec4<f32>` per triangle, `(v0, bitcast(index in mesh))`, `(e1, 0)`,
+//!   `(e2, 0)`, in BVH order.
+//! - `instances`: [`GpuInstance`], the world-to-object transform as three rows plus the root node
+//!   of its BLAS.
+//! - `tlas_nodes` (same encoding, leaves index `tlas_prims`) and `tlas_prims` (instance index).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use super::{Blas, Tlas};
+
+/// One instance on the GPU (64 bytes).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct GpuInstance {
+    /// Rows of the 3x4 world-to-object matrix: `p_local = row_i . (p, 1)`.
+    pub local_from_world: [[f32; 4]; 3],
+    /// Index of its BLAS's root node in `nodes`, or `u32::MAX` for an empty BLAS.
+    pub root: u32,
+    /// Padding.
+    pub pad: [u32; 3],
+}
+
+/// The flattened scene.
+#[derive(Clone, Debug, Default)]
+pub struct GpuBvh {
+    /// BLAS nodes of every mesh.
+    pub nodes: Vec<[f32; 4]>,
+    /// Triangles of every mesh.
+    pub triangles: Vec<[f32; 4]>,
+    /// Instances, in TLAS instance order.
+    pub instances: Vec<GpuInstance>,
+    /// TLAS nodes.
+    pub tlas_nodes: Vec<[f32; 4]>,
+    /// TLAS leaf slots to instance indices.
+    pub tlas_prims: Vec<u32>,
+}
+
+fn push_nodes(
+    out: &mut Vec<[f32; 4]>,
+    nodes: &[obvhs::bvh2::node::Bvh2Node],
+    node_base: u32,
+    leaf_base: u32,
+) {
+    for n in nodes {
+        let (min, max) = (n.aabb.min, n.aabb.max);
+        let first = if n.prim_count == 0 {
+            n.first_index + node_base
+        } else {
+            n.first_index + leaf_base
+        };
+        out.push([min.x, min.y, min.z, f32::from_bits(n.prim_count)]);
+        out.push([max.x, max.y, max.z, f32::from_bits(first)]);
+    }
+}
+
+impl GpuBvh {
+    /// Flatten `tlas`; each BLAS shared by several instances is stored once.
+    pub fn from_tlas(tlas: &Tlas) -> Self {
+        let mut out = GpuBvh::default();
+        let mut roots: HashMap<*const Blas, u32> = HashMap::new();
+        for inst in &tlas.instances {
+            let key = Arc::as_ptr(&inst.blas);
+            let root = *roots.entry(key).or_insert_with(|| {
+                let nodes = inst.blas.nodes();
+                if nodes.is_empty() {
+                    return u32::MAX;
+                }
+                let node_base = (out.nodes.len() / 2) as u32;
+                let tri_base = (out.triangles.len() / 3) as u32;
+                push_nodes(&mut out.nodes, nodes, node_base, tri_base);
+                for (v0, e1, e2, src) in inst.blas.triangles_bvh_order() {
+                    out.triangles.push([v0.x, v0.y, v0.z, f32::from_bits(src)]);
+                    out.triangles.push([e1.x, e1.y, e1.z, 0.0]);
+                    out.triangles.push([e2.x, e2.y, e2.z, 0.0]);
+                }
+                node_base
+            });
+            let m = inst.local_from_world;
+            let (x, y, z, t) = (
+                m.matrix3.x_axis,
+                m.matrix3.y_axis,
+                m.matrix3.z_axis,
+                m.translation,
+            );
+            out.instances.push(GpuInstance {
+                local_from_world: [
+                    [x.x, y.x, z.x, t.x],
+                    [x.y, y.y, z.y, t.y],
+                    [x.z, y.z, z.z, t.z],
+                ],
+                root: if inst.normal_matrix == glam::Mat3::ZERO {
+                    u32::MAX
+                } else {
+                    root
+                },
+                pad: [0; 3],
+            });
+        }
+        let (nodes, prims) = tlas.nodes_and_prims();
+        push_nodes(&mut out.tlas_nodes, nodes, 0, 0);
+        out.tlas_prims = prims.to_vec();
+        out
+    }
+
+    /// `instances` as raw bytes.
+    pub fn instance_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(self.instances.len() * 64);
+        for i in &self.instances {
+            for r in &i.local_from_world {
+                for c in r {
+                    b.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            for u in [i.root, 0, 0, 0] {
+                b.extend_from_slice(&u.to_le_bytes());
+            }
+        }
+        b
+    }
+}
