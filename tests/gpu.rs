@@ -579,15 +579,17 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         b
     };
-    let mut total = 0;
-    for desc in [
+    for (total, desc) in [
         bevy_caustics::scenes::glass_sphere(),
         bevy_caustics::scenes::pool(),
         bevy_caustics::scenes::ring(),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         let (tlas, _, _) = desc.to_trace(8, 8);
         let gpu = GpuBvh::from_tlas(&tlas);
-        let mut rng = Pcg32::new(17, total);
+        let mut rng = Pcg32::new(17, total as u64);
         let n = 4096usize;
         let rays: Vec<(glam::Vec3, glam::Vec3)> = (0..n)
             .map(|_| {
@@ -715,6 +717,5 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
             desc.name
         );
         assert!(hit_count > n / 4);
-        total += 1;
     }
 }

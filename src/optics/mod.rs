@@ -10,11 +10,13 @@
 //! - A normal passed to [`reflect`] / [`refract`] may face either side; the functions orient it.
 //! - `eta` is the ratio `n_incident / n_transmitted`.
 
+mod aaps;
 mod footprint;
 mod fresnel;
 mod offset;
 mod sampling;
 
+pub use aaps::*;
 pub use footprint::*;
 pub use fresnel::*;
 pub use offset::*;
