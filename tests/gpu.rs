@@ -729,8 +729,7 @@ fn run_compute(
     device
         .poll(wgpu::PollType::wait_indefinitely())
         .expect("poll");
-    let data = read.slice(..).get_mapped_range().to_vec();
-    data
+    read.slice(..).get_mapped_range().to_vec()
 }
 
 fn f4_bytes(v: &[[f32; 4]]) -> Vec<u8> {
