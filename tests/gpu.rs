@@ -838,3 +838,53 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
         worst[3]
     );
 }
+
+/// The WGSL quadtree walk (`src/render/quadtree.wgsl`) against `SumQuadtree::walk` for every task
+/// of a random 32x32 density texture, plus tasks past the total.
+#[test]
+fn wgsl_quadtree_walk_matches_rust() {
+    use bevy_caustics::optics::{Pcg32, SumQuadtree};
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let kernel = r#"
+@group(0) @binding(1) var<storage, read_write> walks: array<vec4<u32>>;
+@compute @workgroup_size(64)
+fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&walks) { return; }
+    walks[id.x] = quadtree_walk(32u, id.x);
+}
+"#;
+    let src = format!("{}\n{kernel}", include_str!("../src/render/quadtree.wgsl"));
+    let size = 32u32;
+    let mut rng = Pcg32::new(3, 9);
+    let density: Vec<f32> = (0..size * size)
+        .map(|_| 4.0 + rng.next_f32() * 60.0)
+        .collect();
+    let tree = SumQuadtree::build(&density, size).unwrap();
+    let flat: Vec<u8> = tree
+        .levels
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let n = tree.total() as usize + 100;
+    let data = run_compute(&src, "walk_test", 0, &[flat], n);
+    let u = |i: usize| u32::from_le_bytes(data[4 * i..4 * i + 4].try_into().unwrap());
+    for task in 0..n {
+        let gpu = [
+            u(4 * task),
+            u(4 * task + 1),
+            u(4 * task + 2),
+            u(4 * task + 3),
+        ];
+        match tree.walk(task as u32) {
+            Some((texel, sample, count)) => {
+                assert_eq!(gpu, [texel.x, texel.y, sample, count], "task {task}")
+            }
+            None => assert_eq!(gpu[3], 0, "task {task} past the total"),
+        }
+    }
+    println!("quadtree walk: {} tasks match", tree.total());
+}

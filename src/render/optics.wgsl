@@ -79,3 +79,4 @@ fn optics_floor_square(d: f32) -> u32 {
     let k = u32(floor(sqrt(min(d, 16777216.0))));
     return k * k;
 }
+

@@ -1,0 +1,50 @@
+// The AAPS task-buffer quadtree walk: WGSL twin of `SumQuadtree::walk` (src/optics/aaps.rs),
+// tested against it on lavapipe (tests/gpu.rs, wgsl_quadtree_walk_matches_rust).
+
+@group(0) @binding(0) var<storage, read> qt_levels: array<u32>;
+
+// SumQuadtree::walk (src/optics/aaps.rs) over a tree stored level by level from the leaves
+// (`size x size`) to the root (1 x 1), concatenated in `qt_levels` (group 0, binding 0). Returns (texel.x, texel.y,
+// sample in the leaf, samples in the leaf), or count 0 for a task past the total.
+fn quadtree_walk(size: u32, task: u32) -> vec4<u32> {
+    // Offsets of each level: level k has (size >> k)^2 entries.
+    var offsets: array<u32, 16>;
+    var n_levels = 0u;
+    var off = 0u;
+    var s = size;
+    loop {
+        offsets[n_levels] = off;
+        off += s * s;
+        n_levels += 1u;
+        if s <= 1u || n_levels >= 16u {
+            break;
+        }
+        s = s / 2u;
+    }
+    let total = qt_levels[offsets[n_levels - 1u]];
+    if task >= total {
+        return vec4(0u);
+    }
+    var rest = task;
+    var pos = vec2(0u);
+    var side = 1u;
+    for (var l = i32(n_levels) - 2; l >= 0; l -= 1) {
+        side *= 2u;
+        var found = false;
+        for (var k = 0u; k < 4u; k += 1u) {
+            let c = pos * 2u + vec2(k & 1u, k >> 1u);
+            let n = qt_levels[offsets[l] + c.y * side + c.x];
+            if rest < n {
+                pos = c;
+                found = true;
+                break;
+            }
+            rest -= n;
+        }
+        if !found {
+            return vec4(0u);
+        }
+    }
+    let count = qt_levels[pos.y * size + pos.x];
+    return vec4(pos.x, pos.y, rest, count);
+}
