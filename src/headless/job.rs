@@ -138,6 +138,7 @@ struct Outcome {
     error: Option<String>,
     report: RenderReport,
     twin_raw: Vec<u8>,
+    finished: bool,
     pass_samples: BTreeMap<String, Vec<f64>>,
 }
 
@@ -247,6 +248,14 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         .map_err(|_| "internal error: poisoned state".to_string())?;
     if let Some(e) = o.error.take() {
         return Err(e);
+    }
+    if !o.finished && !job.window {
+        // Bevy quits on a wgpu validation or out-of-memory error (its default
+        // RenderErrorHandler); a render that stopped early is an error, never a result.
+        return Err(
+            "the renderer stopped before the frame was finished (a GPU error? see the log above)"
+                .into(),
+        );
     }
     let samples = std::mem::take(&mut o.pass_samples);
     for (k, mut v) in samples {
@@ -630,6 +639,7 @@ fn drive(
                 o.error
                     .get_or_insert("the frame readback did not arrive".to_string());
             }
+            o.finished = true;
             exit.write(AppExit::Success);
         }
     }
