@@ -83,6 +83,24 @@ fn bvh_triangle(o: vec3<f32>, d: vec3<f32>, v0: vec3<f32>, e1: vec3<f32>, e2: ve
 fn bvh_node_lo(i: u32) -> vec4<f32> { return bvh_nodes[2u * i]; }
 fn bvh_node_hi(i: u32) -> vec4<f32> { return bvh_nodes[2u * i + 1u]; }
 
+// Shared by both levels: test a node `(lo, hi)` and return (prim_count, first_index), or
+// (BVH_INVALID, 0) when the ray misses its box within [tmin, tmax].
+fn bvh_visit(lo: vec4<f32>, hi: vec4<f32>, o: vec3<f32>, inv: vec3<f32>, tmin: f32, tmax: f32) -> vec2<u32> {
+    if bvh_box(lo.xyz, hi.xyz, o, inv, tmin, tmax) > 2.0e38 {
+        return vec2(BVH_INVALID, 0u);
+    }
+    return vec2(bitcast<u32>(lo.w), bitcast<u32>(hi.w));
+}
+
+// Push the two children of an inner node (children are at first and first + 1).
+fn bvh_push_children(stack: ptr<function, array<u32, BVH_STACK>>, sp: ptr<function, u32>, first: u32) {
+    if *sp + 2u <= BVH_STACK {
+        (*stack)[*sp] = first;
+        (*stack)[*sp + 1u] = first + 1u;
+        *sp += 2u;
+    }
+}
+
 // Closest hit inside one instance's BLAS; updates `best` when closer.
 fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, best: ptr<function, BvhHit>) {
     let inst = bvh_instances[inst_index];
@@ -101,19 +119,14 @@ fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, 
     while sp > 0u {
         sp -= 1u;
         let n = stack[sp];
-        let lo = bvh_node_lo(n);
-        let hi = bvh_node_hi(n);
-        if bvh_box(lo.xyz, hi.xyz, o, inv, tmin, (*best).t) > 2.0e38 {
+        let v = bvh_visit(bvh_node_lo(n), bvh_node_hi(n), o, inv, tmin, (*best).t);
+        let count = v.x;
+        let first = v.y;
+        if count == BVH_INVALID {
             continue;
         }
-        let count = bitcast<u32>(lo.w);
-        let first = bitcast<u32>(hi.w);
         if count == 0u {
-            if sp + 2u <= BVH_STACK {
-                stack[sp] = first;
-                stack[sp + 1u] = first + 1u;
-                sp += 2u;
-            }
+            bvh_push_children(&stack, &sp, first);
             continue;
         }
         for (var k = 0u; k < count; k += 1u) {
@@ -145,19 +158,14 @@ fn bvh_closest_hit(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> BvhHit {
     while sp > 0u {
         sp -= 1u;
         let n = stack[sp];
-        let lo = tlas_nodes[2u * n];
-        let hi = tlas_nodes[2u * n + 1u];
-        if bvh_box(lo.xyz, hi.xyz, o, inv, tmin, best.t) > 2.0e38 {
+        let v = bvh_visit(tlas_nodes[2u * n], tlas_nodes[2u * n + 1u], o, inv, tmin, best.t);
+        let count = v.x;
+        let first = v.y;
+        if count == BVH_INVALID {
             continue;
         }
-        let count = bitcast<u32>(lo.w);
-        let first = bitcast<u32>(hi.w);
         if count == 0u {
-            if sp + 2u <= BVH_STACK {
-                stack[sp] = first;
-                stack[sp + 1u] = first + 1u;
-                sp += 2u;
-            }
+            bvh_push_children(&stack, &sp, first);
             continue;
         }
         for (var k = 0u; k < count; k += 1u) {
