@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --example render -- SCENE.gltf --technique reference --width 256 \
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
-//!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr]
+//!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
 //! ```
 //!
 //! Errors (missing file, no camera, no lights, no adapter, bad option) print one line and
@@ -52,8 +52,9 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         match a {
             "--technique" => {
                 let t = v.ok_or("--technique needs a value")?;
-                job.technique = CausticsTechnique::from_name(t)
-                    .ok_or_else(|| format!("unknown technique '{t}' (available: reference)"))?;
+                job.technique = CausticsTechnique::from_name(t).ok_or_else(|| {
+                    format!("unknown technique '{t}' (available: reference, aaps)")
+                })?;
             }
             "--width" => job.width = num(v, a)? as u32,
             "--height" => job.height = num(v, a)? as u32,
@@ -68,6 +69,39 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| format!("--ev100 expects a number, got '{t}'"))?;
                 job.ev100 = Some(ev);
+            }
+            "--aaps" => {
+                // AAPS settings as `field=value,field=value` (AapsSettings field names).
+                let t = v.ok_or("--aaps needs field=value pairs")?;
+                for kv in t.split(',') {
+                    let (k, x) = kv
+                        .split_once('=')
+                        .ok_or_else(|| format!("--aaps expects field=value, got '{kv}'"))?;
+                    let f = || {
+                        x.parse::<f32>()
+                            .ok()
+                            .filter(|x| x.is_finite())
+                            .ok_or_else(|| format!("--aaps {k} expects a number, got '{x}'"))
+                    };
+                    let a = &mut job.aaps;
+                    match k {
+                        "atlas_resolution" => a.atlas_resolution = f()? as u32,
+                        "target_area" => a.target_area = f()?,
+                        "variance_gain" => a.variance_gain = f()?,
+                        "temporal_weight" => a.temporal_weight = f()?,
+                        "min_density" => a.min_density = f()?,
+                        "max_density" => a.max_density = f()?,
+                        "cull_solid_angle" => a.cull_solid_angle = f()?,
+                        "msaa_threshold" => a.msaa_threshold = f()?,
+                        "max_anisotropy" => a.max_anisotropy = f()?,
+                        "splat_scale" => a.splat_scale = f()?,
+                        "max_bounces" => a.max_bounces = f()? as u32,
+                        "splat_capacity" => a.splat_capacity = f()? as u32,
+                        "adaptive" => a.adaptive = f()? != 0.0,
+                        "drop_large_splats" => a.drop_large_splats = f()? != 0.0,
+                        _ => return Err(format!("--aaps: unknown field '{k}'")),
+                    }
+                }
             }
             "--out-exr" => out.exr = Some(path(v)?),
             "--out-png" => out.png = Some(path(v)?),
@@ -84,7 +118,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]")?;
     Ok((job, out))
 }
 

@@ -34,15 +34,15 @@ use bevy::render::renderer::{RenderAdapter, RenderDevice};
 
 pub use components::validate::CausticsWarnings;
 pub use components::{
-    CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality, CausticsTechnique,
-    CausticsVolume, VolumeFace,
+    AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
+    CausticsTechnique, CausticsVolume, VolumeFace,
 };
 pub use render::CausticsDispatchLog;
 
 /// Everything a user needs.
 pub mod prelude {
     pub use crate::{
-        CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
+        AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
         CausticsQuality, CausticsTechnique, CausticsVolume, VolumeFace,
     };
 }
@@ -92,6 +92,7 @@ pub fn missing_gpu_capabilities(flags: DownlevelFlags, limits: &Limits) -> Vec<S
 impl Plugin for CausticsPlugin {
     fn build(&self, app: &mut App) {
         app.register_type::<Caustics>()
+            .register_type::<AapsSettings>()
             .register_type::<CausticLight>()
             .register_type::<CausticMaterial>()
             .register_type::<CausticsVolume>()

@@ -2,8 +2,8 @@
 //! tracer against closed forms, metrics, validation and the scene files. No GPU.
 
 use bevy_caustics::optics::*;
-use bevy_caustics::reference::{CausticImage, TraceSettings, compare, trace};
-use bevy_caustics::scene::{CameraProjection, Surface, TraceCamera};
+use bevy_caustics::reference::{CausticImage, TraceSettings, compare, plane_region_mean, trace};
+use bevy_caustics::scene::Surface;
 use bevy_caustics::scenes;
 use glam::{Vec2, Vec3};
 use proptest::prelude::*;
@@ -329,38 +329,6 @@ fn degenerate_triangles_are_skipped() {
 
 const N: u64 = 1 << 20;
 
-/// Mean irradiance over the pixels whose eye ray meets the plane `n . x = d` inside `inside`.
-fn region_mean(
-    img: &CausticImage,
-    cam: &TraceCamera,
-    n: Vec3,
-    d: f32,
-    inside: impl Fn(Vec3) -> bool,
-) -> (f32, usize) {
-    let CameraProjection::Perspective { fov_y } = cam.projection else {
-        unreachable!()
-    };
-    let focal = PixelFocal::from_fov_y(fov_y, cam.width, cam.height);
-    let eye = cam.position();
-    let (mut sum, mut count) = (0.0f64, 0usize);
-    for y in 0..cam.height {
-        for x in 0..cam.width {
-            let local = Vec3::new(
-                (x as f32 + 0.5 - 0.5 * cam.width as f32) / focal.fx,
-                -(y as f32 + 0.5 - 0.5 * cam.height as f32) / focal.fy,
-                -1.0,
-            );
-            let dir = cam.world_from_view.transform_vector3(local).normalize();
-            let t = (d - n.dot(eye)) / n.dot(dir);
-            if t > 0.0 && inside(eye + dir * t) {
-                sum += luminance(img.get(x, y)) as f64;
-                count += 1;
-            }
-        }
-    }
-    ((sum / count.max(1) as f64) as f32, count)
-}
-
 /// Trace `desc` and compare the mean irradiance over the pixels that see `region` of the plane
 /// `n . x = d` with the closed form `expect`: within 2 %.
 fn check_closed_form(
@@ -384,7 +352,7 @@ fn check_closed_form(
         None,
     );
     assert!(out.image.all_finite());
-    let (mean, px) = region_mean(&out.image, &cam, n, d, region);
+    let (mean, px) = plane_region_mean(&out.image, &cam, n, d, region);
     let err = mean / expect - 1.0;
     println!(
         "{}: mean {mean:.1} lx over {px} px, closed form {expect:.1} lx, error {:.3} %",

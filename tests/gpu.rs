@@ -10,6 +10,11 @@ use bevy_caustics::headless::{RenderJob, find_adapter, run};
 
 static GPU: Mutex<()> = Mutex::new(());
 
+#[path = "gpu/aaps.rs"]
+mod aaps;
+#[path = "gpu/twins.rs"]
+mod twins;
+
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets/scenes")
@@ -502,6 +507,23 @@ fn stiff_and_extreme_cases_gpu() {
             }
         }
         bevy_caustics::scenes::gltf::write_gltf(&desc, &dir).unwrap();
+        // The GPU technique too: every buffer it reads back must be finite.
+        let aaps = run(RenderJob {
+            scene: dir.join(format!("stiff_{i}.gltf")),
+            technique: bevy_caustics::CausticsTechnique::Aaps,
+            width: 32,
+            height: 32,
+            photons: Some(case.photons.min(1 << 16)),
+            frames: 4,
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("{} (aaps): {e}", case.name));
+        println!("{:<48} aaps {:?}", case.name, aaps.aaps);
+        assert!(
+            aaps.caustics.as_ref().unwrap().all_finite(),
+            "{} (aaps): non-finite caustics",
+            case.name
+        );
         let report = run(RenderJob {
             scene: dir.join(format!("stiff_{i}.gltf")),
             width: 32,
@@ -524,367 +546,4 @@ fn stiff_and_extreme_cases_gpu() {
         assert_eq!(report.linear_with.len(), 32 * 32, "{}", case.name);
         assert!(report.caustics.unwrap().all_finite(), "{}", case.name);
     }
-}
-
-/// The WGSL closest-hit traversal (`src/render/bvh.wgsl`) against the CPU BVH on thousands of
-/// random rays through three scenes: same instance and triangle (or a tie at the same
-/// distance on a shared edge), t within 1e-4 relative. Runs as a plain wgpu compute dispatch.
-#[test]
-fn wgsl_bvh_matches_cpu_bvh() {
-    use bevy_caustics::optics::{Pcg32, uniform_sphere};
-    use bevy_caustics::scene::gpu::GpuBvh;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
-    if !require_gpu() {
-        return;
-    }
-    let kernel = r#"
-@group(0) @binding(5) var<storage, read> rays: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> hits: array<vec4<u32>>;
-@compute @workgroup_size(64)
-fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= arrayLength(&hits) { return; }
-    let h = bvh_closest_hit(rays[2u * i].xyz, rays[2u * i + 1u].xyz, 0.0, BVH_FAR);
-    hits[i] = vec4(bitcast<u32>(h.t), h.instance, h.triangle, 0u);
-}
-"#;
-    let src = format!("{}\n{kernel}", include_str!("../src/render/bvh.wgsl"));
-    for (total, desc) in [
-        bevy_caustics::scenes::glass_sphere(),
-        bevy_caustics::scenes::pool(),
-        bevy_caustics::scenes::ring(),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let (tlas, _, _) = desc.to_trace(8, 8);
-        let gpu = GpuBvh::from_tlas(&tlas);
-        let mut rng = Pcg32::new(17, total as u64);
-        let n = 4096usize;
-        let rays: Vec<(glam::Vec3, glam::Vec3)> = (0..n)
-            .map(|_| {
-                let o = glam::Vec3::new(
-                    rng.next_f32() * 4.0 - 2.0,
-                    rng.next_f32() * 2.5,
-                    rng.next_f32() * 4.0 - 2.0,
-                );
-                (o, uniform_sphere(rng.next_vec2()))
-            })
-            .collect();
-        let ray_data: Vec<[f32; 4]> = rays
-            .iter()
-            .flat_map(|(o, d)| [[o.x, o.y, o.z, 0.0], [d.x, d.y, d.z, 0.0]])
-            .collect();
-        let prims: Vec<u8> = gpu
-            .tlas_prims
-            .iter()
-            .flat_map(|p| p.to_le_bytes())
-            .collect();
-        let inputs = [
-            f4_bytes(&gpu.nodes),
-            f4_bytes(&gpu.triangles),
-            gpu.instance_bytes(),
-            f4_bytes(&gpu.tlas_nodes),
-            prims,
-            f4_bytes(&ray_data),
-        ];
-        let data = run_compute(&src, "trace_rays", 0, &inputs, n);
-        let (mut hit_count, mut ties) = (0, 0);
-        for (i, (o, d)) in rays.iter().enumerate() {
-            let w = |k: usize| {
-                u32::from_le_bytes(data[i * 16 + 4 * k..i * 16 + 4 * k + 4].try_into().unwrap())
-            };
-            let (gt, ginst, gtri) = (f32::from_bits(w(0)), w(1), w(2));
-            match tlas.closest_hit(*o, *d, 0.0, f32::INFINITY, |_| false) {
-                Some(h) => {
-                    hit_count += 1;
-                    assert_ne!(
-                        ginst,
-                        u32::MAX,
-                        "{}: ray {i} hit on the CPU, missed on the GPU",
-                        desc.name
-                    );
-                    assert!(
-                        (gt - h.t).abs() <= 1e-4 * h.t.max(1.0),
-                        "{}: ray {i}: t {gt} vs {}",
-                        desc.name,
-                        h.t
-                    );
-                    if (ginst, gtri) != (h.instance, h.triangle) {
-                        // A shared edge: both triangles are hit at the same distance.
-                        assert!(
-                            (gt - h.t).abs() <= 1e-6 * h.t.max(1.0),
-                            "{}: ray {i}: ({ginst},{gtri}) vs ({},{})",
-                            desc.name,
-                            h.instance,
-                            h.triangle
-                        );
-                        ties += 1;
-                    }
-                }
-                None => assert_eq!(
-                    ginst,
-                    u32::MAX,
-                    "{}: ray {i} missed on the CPU, hit on the GPU at {gt}",
-                    desc.name
-                ),
-            }
-        }
-        println!(
-            "{}: {n} rays, {hit_count} hits, {ties} edge ties, all match",
-            desc.name
-        );
-        assert!(hit_count > n / 4);
-    }
-}
-
-/// Run `entry` of the WGSL module `src` on a plain wgpu device, one invocation per output
-/// element: `inputs` are bound read-only at bindings `first_binding..`, the output (`out_len`
-/// 16-byte elements) at the binding after them. Returns the output bytes.
-fn run_compute(
-    src: &str,
-    entry: &str,
-    first_binding: u32,
-    inputs: &[Vec<u8>],
-    out_len: usize,
-) -> Vec<u8> {
-    use wgpu::util::DeviceExt;
-    let instance = wgpu::Instance::default();
-    let adapter =
-        bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-            .expect("adapter");
-    let (device, queue) =
-        bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
-            .expect("device");
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(entry),
-        source: wgpu::ShaderSource::Wgsl(src.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let bufs: Vec<wgpu::Buffer> = inputs
-        .iter()
-        .map(|b| {
-            let mut b = b.clone();
-            if b.len() < 16 {
-                b.resize(16, 0);
-            }
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: None,
-                contents: &b,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        })
-        .collect();
-    let size = (out_len * 16) as u64;
-    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    let out = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("out"),
-        size,
-        usage,
-        mapped_at_creation: false,
-    });
-    let usage = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
-    let read = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("read"),
-        size,
-        usage,
-        mapped_at_creation: false,
-    });
-    let mut entries: Vec<wgpu::BindGroupEntry> = bufs
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: first_binding + i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    entries.push(wgpu::BindGroupEntry {
-        binding: first_binding + bufs.len() as u32,
-        resource: out.as_entire_binding(),
-    });
-    let layout = pipeline.get_bind_group_layout(0);
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &layout,
-        entries: &entries,
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups((out_len as u32).div_ceil(64), 1, 1);
-    }
-    enc.copy_buffer_to_buffer(&out, 0, &read, 0, size);
-    queue.submit([enc.finish()]);
-    read.slice(..)
-        .map_async(wgpu::MapMode::Read, |r| r.expect("map"));
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("poll");
-    read.slice(..).get_mapped_range().to_vec()
-}
-
-fn f4_bytes(v: &[[f32; 4]]) -> Vec<u8> {
-    v.iter()
-        .flat_map(|x| x.iter().flat_map(|c| c.to_le_bytes()))
-        .collect()
-}
-
-/// The WGSL twins of the optics core (`src/render/optics.wgsl`) against the Rust functions on
-/// 8192 inputs, extremes included (grazing, normal incidence, IOR 1, 1/4 and 4): Fresnel,
-/// refraction (including which side of TIR), reflection and the equal-area map to 1e-5,
-/// floor_square exactly.
-#[test]
-fn wgsl_optics_match_rust() {
-    use bevy_caustics::optics::*;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
-    if !require_gpu() {
-        return;
-    }
-    let kernel = r#"
-@group(0) @binding(0) var<storage, read> inputs: array<vec4<f32>>;
-@group(0) @binding(1) var<storage, read_write> outputs: array<vec4<f32>>;
-@compute @workgroup_size(64)
-fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= arrayLength(&outputs) / 4u { return; }
-    let a = inputs[2u * i];
-    let b = inputs[2u * i + 1u];
-    outputs[4u * i] = vec4(optics_fresnel_dielectric(a.w, b.w), f32(optics_floor_square(a.w * 40.0)), 0.0, 0.0);
-    outputs[4u * i + 1u] = optics_refract(a.xyz, b.xyz, b.w);
-    outputs[4u * i + 2u] = vec4(optics_reflect(a.xyz, b.xyz), 0.0);
-    outputs[4u * i + 3u] = vec4(optics_equal_area_square_to_sphere(vec2(a.w, b.w / 4.0)), 0.0);
-}
-"#;
-    let src = format!("{}\n{kernel}", include_str!("../src/render/optics.wgsl"));
-    let mut rng = Pcg32::new(99, 1);
-    let mut cases: Vec<(glam::Vec3, glam::Vec3, f32, f32)> = Vec::new();
-    for k in 0..8192 {
-        let d = uniform_sphere(rng.next_vec2());
-        let n = uniform_sphere(rng.next_vec2());
-        let (c, eta) = match k {
-            0 => (0.0, 1.0 / 1.5),
-            1 => (1.0, 1.0),
-            2 => (1e-7, 4.0),
-            3 => (0.5, 0.25),
-            _ => (rng.next_f32(), 0.25 + rng.next_f32() * 3.75),
-        };
-        cases.push((d, n, c, eta));
-    }
-    let input: Vec<[f32; 4]> = cases
-        .iter()
-        .flat_map(|(d, n, c, eta)| [[d.x, d.y, d.z, *c], [n.x, n.y, n.z, *eta]])
-        .collect();
-    let data = run_compute(&src, "optics_test", 0, &[f4_bytes(&input)], cases.len() * 4);
-    let f = |i: usize| f32::from_le_bytes(data[4 * i..4 * i + 4].try_into().unwrap());
-    let v = |e: usize| glam::Vec3::new(f(4 * e), f(4 * e + 1), f(4 * e + 2));
-    let mut worst = [0.0f32; 4];
-    for (i, (d, n, c, eta)) in cases.iter().enumerate() {
-        let e = 4 * i;
-        let fr = fresnel_dielectric(*c, *eta);
-        worst[0] = worst[0].max((f(4 * e) - fr).abs());
-        assert!(
-            (f(4 * e) - fr).abs() < 1e-5,
-            "fresnel({c}, {eta}): {} vs {fr}",
-            f(4 * e)
-        );
-        assert_eq!(
-            f(4 * e + 1) as u32,
-            floor_square(c * 40.0),
-            "floor_square({})",
-            c * 40.0
-        );
-        match refract(*d, *n, *eta) {
-            Some(t) => {
-                assert_eq!(
-                    f(4 * (e + 1) + 3),
-                    1.0,
-                    "refract {d} {n} {eta}: TIR on the GPU only"
-                );
-                worst[1] = worst[1].max((v(e + 1) - t).length());
-                assert!((v(e + 1) - t).length() < 1e-5, "refract {d} {n} {eta}");
-            }
-            None => assert_eq!(
-                f(4 * (e + 1) + 3),
-                0.0,
-                "refract {d} {n} {eta}: TIR on the CPU only"
-            ),
-        }
-        let r = reflect(*d, *n);
-        worst[2] = worst[2].max((v(e + 2) - r).length());
-        assert!((v(e + 2) - r).length() < 1e-5);
-        let m = equal_area_square_to_sphere(glam::Vec2::new(*c, eta / 4.0));
-        worst[3] = worst[3].max((v(e + 3) - m).length());
-        assert!(
-            (v(e + 3) - m).length() < 1e-5,
-            "equal area ({c}, {})",
-            eta / 4.0
-        );
-    }
-    println!(
-        "WGSL vs Rust over {} cases, worst |difference|: fresnel {:.1e}, refract {:.1e}, reflect {:.1e}, equal-area {:.1e}",
-        cases.len(),
-        worst[0],
-        worst[1],
-        worst[2],
-        worst[3]
-    );
-}
-
-/// The WGSL quadtree walk (`src/render/quadtree.wgsl`) against `SumQuadtree::walk` for every task
-/// of a random 32x32 density texture, plus tasks past the total.
-#[test]
-fn wgsl_quadtree_walk_matches_rust() {
-    use bevy_caustics::optics::{Pcg32, SumQuadtree};
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
-    if !require_gpu() {
-        return;
-    }
-    let kernel = r#"
-@group(0) @binding(1) var<storage, read_write> walks: array<vec4<u32>>;
-@compute @workgroup_size(64)
-fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= arrayLength(&walks) { return; }
-    walks[id.x] = quadtree_walk(32u, id.x);
-}
-"#;
-    let src = format!("{}\n{kernel}", include_str!("../src/render/quadtree.wgsl"));
-    let size = 32u32;
-    let mut rng = Pcg32::new(3, 9);
-    let density: Vec<f32> = (0..size * size)
-        .map(|_| 4.0 + rng.next_f32() * 60.0)
-        .collect();
-    let tree = SumQuadtree::build(&density, size).unwrap();
-    let flat: Vec<u8> = tree
-        .levels
-        .iter()
-        .flatten()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
-    let n = tree.total() as usize + 100;
-    let data = run_compute(&src, "walk_test", 0, &[flat], n);
-    let u = |i: usize| u32::from_le_bytes(data[4 * i..4 * i + 4].try_into().unwrap());
-    for task in 0..n {
-        let gpu = [
-            u(4 * task),
-            u(4 * task + 1),
-            u(4 * task + 2),
-            u(4 * task + 3),
-        ];
-        match tree.walk(task as u32) {
-            Some((texel, sample, count)) => {
-                assert_eq!(gpu, [texel.x, texel.y, sample, count], "task {task}")
-            }
-            None => assert_eq!(gpu[3], 0, "task {task} past the total"),
-        }
-    }
-    println!("quadtree walk: {} tasks match", tree.total());
 }

@@ -17,10 +17,10 @@ use bevy::prelude::*;
 #[reflect(Component, Default, Clone)]
 #[require(Hdr, DepthPrepass, DeferredPrepass)]
 pub struct Caustics {
-    /// Which algorithm fills the caustics buffer. Default [`CausticsTechnique::Reference`]
-    /// (the only one available in this version).
+    /// Which algorithm fills the caustics buffer. Default [`CausticsTechnique::Reference`].
     pub technique: CausticsTechnique,
-    /// Quality preset: photons per light for the reference tracer. Default `Medium`.
+    /// Quality preset: photons per light for the reference tracer, the photon budget per light
+    /// per frame for AAPS. Default `Medium`.
     pub quality: CausticsQuality,
     /// What the composite shows. Default `Off` (normal shading).
     pub debug_view: CausticsDebugView,
@@ -46,6 +46,11 @@ pub enum CausticsTechnique {
     /// scene change on a background task and uploads the image; seconds, not milliseconds.
     #[default]
     Reference,
+    /// Adaptive anisotropic photon scattering on the GPU (seed 004): compute-shader photon
+    /// tracing through the scene BVH with photon differentials, anisotropic splats
+    /// rasterised into the caustics buffer, and a task buffer that adapts the photon density
+    /// every frame. Milliseconds per frame. Settings: [`crate::AapsSettings`].
+    Aaps,
 }
 
 impl CausticsTechnique {
@@ -53,6 +58,7 @@ impl CausticsTechnique {
     pub fn name(self) -> &'static str {
         match self {
             Self::Reference => "reference",
+            Self::Aaps => "aaps",
         }
     }
 
@@ -60,6 +66,7 @@ impl CausticsTechnique {
     pub fn from_name(s: &str) -> Option<Self> {
         match s {
             "reference" => Some(Self::Reference),
+            "aaps" => Some(Self::Aaps),
             _ => None,
         }
     }

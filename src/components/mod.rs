@@ -3,12 +3,14 @@
 //! Every type is `Reflect`; every field documents its unit, default, valid range and cost.
 //! Invalid values are clamped by [`validate`] with one `warn!` naming the entity and the field.
 
+mod aaps;
 mod camera;
 mod light;
 mod material;
 pub mod validate;
 mod volume;
 
+pub use aaps::*;
 pub use camera::*;
 pub use light::*;
 pub use material::*;

@@ -62,6 +62,8 @@ pub struct RenderJob {
     pub per_frame: Option<fn(&mut World, u32)>,
     /// Give every light of the scene a `CausticLight` (default true).
     pub mark_lights: bool,
+    /// Settings of the `aaps` technique. Default: `AapsSettings::default()`.
+    pub aaps: crate::AapsSettings,
 }
 
 impl Default for RenderJob {
@@ -81,6 +83,7 @@ impl Default for RenderJob {
             hook: None,
             per_frame: None,
             mark_lights: true,
+            aaps: Default::default(),
         }
     }
 }
@@ -125,6 +128,41 @@ pub struct RenderReport {
     pub linear_without: Vec<[f32; 4]>,
     /// With `linear`: the camera's exposure.
     pub exposure: f32,
+    /// AAPS counters of the last frame (technique `aaps` only).
+    pub aaps: Option<AapsCounters>,
+}
+
+/// The AAPS counters of one frame, read back from the GPU after the render.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct AapsCounters {
+    /// Photons the task buffer asked for.
+    pub tasks: u64,
+    /// Photons traced.
+    pub photons_emitted: u64,
+    /// Splats drawn (both lists).
+    pub splats: u64,
+    /// Of which small (MSAA) splats.
+    pub splats_msaa: u64,
+    /// Splats that did not fit in the splat buffer (not drawn).
+    pub splat_overflow: u64,
+    /// Splats culled: outside the frustum or facing away from the camera.
+    pub culled_frustum: u64,
+    /// Splats culled above the solid-angle threshold.
+    pub culled_size: u64,
+    /// Photons whose first hit was not a caster.
+    pub dropped: u64,
+    /// Splats whose axes were clamped, and differentials parallel to a surface.
+    pub clamped: u64,
+    /// Non-finite values caught.
+    pub nan_guards: u64,
+    /// Paths stopped at the maximum number of bounces.
+    pub max_depth: u64,
+    /// Total internal reflections.
+    pub tir: u64,
+    /// Photons past the photon capacity.
+    pub photon_overflow: u64,
+    /// Photons split at a dielectric.
+    pub splits: u64,
 }
 
 #[derive(Resource, Clone)]
@@ -138,6 +176,7 @@ struct Outcome {
     error: Option<String>,
     report: RenderReport,
     twin_raw: Vec<u8>,
+    snapshot: Option<crate::render::readback::CausticsSnapshot>,
     finished: bool,
     pass_samples: BTreeMap<String, Vec<f64>>,
 }
@@ -379,6 +418,7 @@ fn drive(
     >,
     diagnostics: Res<DiagnosticsStore>,
     log: Res<CausticsDispatchLog>,
+    readback: Res<crate::render::readback::CausticsReadback>,
     warnings: Res<crate::CausticsWarnings>,
     frames: Res<FrameCount>,
     mut exit: MessageWriter<AppExit>,
@@ -456,6 +496,7 @@ fn drive(
             };
             let transform = gt.compute_transform();
             let mut main = commands.spawn((
+                job.0.aaps.clone(),
                 MainCamera,
                 Camera3d::default(),
                 Camera {
@@ -502,6 +543,11 @@ fn drive(
             let Ok((status, _, progress)) = main.single() else {
                 return;
             };
+            if job.0.technique != CausticsTechnique::Reference {
+                log.take();
+                *phase = Phase::Measuring(0);
+                return;
+            }
             match status {
                 Some(ReferenceStatus::Ready) | Some(ReferenceStatus::Inactive) => {
                     if job.0.progress && progress.is_some() {
@@ -530,7 +576,9 @@ fn drive(
             let mut o = shared.0.lock().expect("state");
             // Diagnostics arrive a few frames late: sample after a warm-up.
             if n >= 3 {
-                for pass in [COMPOSITE_PASS] {
+                for pass in
+                    std::iter::once(COMPOSITE_PASS).chain(crate::render::aaps::passes::ALL_PASSES)
+                {
                     for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
                         let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
                         if let Some(v) = diagnostics.get(&path).and_then(|d| d.value()) {
@@ -548,6 +596,9 @@ fn drive(
                 }
             }
             if n + 1 >= job.0.frames.max(4) && !job.0.window {
+                if job.0.technique != CausticsTechnique::Reference {
+                    readback.request();
+                }
                 commands
                     .spawn(Readback::texture(handles.target.clone()))
                     .observe(
@@ -575,7 +626,15 @@ fn drive(
             }
         }
         Phase::Finishing(n) => {
-            if n < 4 {
+            if job.0.technique != CausticsTechnique::Reference
+                && let Some(snap) = readback.poll()
+                && let Ok(mut o) = shared.0.lock()
+            {
+                o.snapshot = Some(snap);
+            }
+            let waiting = job.0.technique != CausticsTechnique::Reference
+                && shared.0.lock().is_ok_and(|o| o.snapshot.is_none());
+            if n < 4 || (waiting && n < 600) {
                 *phase = Phase::Finishing(n + 1);
                 return;
             }
@@ -600,7 +659,31 @@ fn drive(
                         .map(|p| (p.to_string(), v))
                 })
                 .collect();
-            if let Ok((_, image, _)) = main.single() {
+            if let Some(snap) = o.snapshot.take() {
+                let c = |i: usize| snap.counters[i] as u64;
+                o.report.photons_traced = c(1);
+                o.report.photons_in_view = c(3) + c(4);
+                o.report.aaps = Some(AapsCounters {
+                    tasks: c(0),
+                    photons_emitted: c(1),
+                    splats: c(3) + c(4),
+                    splats_msaa: c(4),
+                    splat_overflow: c(5),
+                    culled_frustum: c(6),
+                    culled_size: c(7),
+                    dropped: c(8),
+                    clamped: c(9),
+                    nan_guards: c(10),
+                    max_depth: c(11),
+                    tir: c(13),
+                    photon_overflow: c(14),
+                    splits: c(15),
+                });
+                o.report.caustics = Some(snap.image);
+            } else if job.0.technique != CausticsTechnique::Reference {
+                o.error
+                    .get_or_insert("the caustics buffer readback did not arrive".to_string());
+            } else if let Ok((_, image, _)) = main.single() {
                 if let Some(img) = image {
                     o.report.caustics = Some((*img.image).clone());
                     o.report.photons_traced = img.stats.photons_emitted;

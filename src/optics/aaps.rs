@@ -313,3 +313,32 @@ pub fn splat_from_differentials(
         clamped,
     )
 }
+
+/// The frame's photon budget as a ceiling (our decision; seed 004 leaves the total to the
+/// target area alone): when the blended densities sum to more than `budget`, every texel is
+/// scaled by `budget / sum`, then rounded down to a square and kept at least at the minimum's
+/// square. Under the budget nothing changes.
+pub fn scale_to_budget(d: f32, sum: f32, budget: f32, min_density: f32) -> f32 {
+    let s = if sum > budget && sum > 0.0 && budget >= 0.0 && sum.is_finite() {
+        budget / sum
+    } else {
+        1.0
+    };
+    floor_square(d * s).max(floor_square(min_density.max(1.0))) as f32
+}
+
+/// The starting (and, for a frozen task buffer, the permanent) uniform density: the budget
+/// spread evenly over `texels`, at least `min_density`, at most `max_density` (0: none),
+/// rounded down to a square.
+pub fn uniform_density(budget: f64, texels: u32, min_density: f32, max_density: f32) -> f32 {
+    let per = if texels == 0 {
+        0.0
+    } else {
+        (budget / texels as f64) as f32
+    };
+    let mut d = per.max(min_density.max(1.0));
+    if max_density > 0.0 && max_density.is_finite() {
+        d = d.min(max_density.max(min_density.max(1.0)));
+    }
+    floor_square(d).max(1) as f32
+}

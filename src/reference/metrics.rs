@@ -6,7 +6,8 @@
 use glam::Vec3;
 
 use super::image::CausticImage;
-use crate::optics::luminance;
+use crate::optics::{PixelFocal, luminance};
+use crate::scene::{CameraProjection, TraceCamera};
 
 /// The metrics the report and the CLI print.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -130,4 +131,37 @@ pub fn srgb_encode(x: f32) -> f32 {
     } else {
         1.055 * x.powf(1.0 / 2.4) - 0.055
     }
+}
+
+/// Mean luminance of the irradiance over the pixels whose eye ray meets the plane `n . x = d`
+/// inside `inside`, and their number (closed-form checks).
+pub fn plane_region_mean(
+    img: &CausticImage,
+    cam: &TraceCamera,
+    n: Vec3,
+    d: f32,
+    inside: impl Fn(Vec3) -> bool,
+) -> (f32, usize) {
+    let CameraProjection::Perspective { fov_y } = cam.projection else {
+        return (0.0, 0);
+    };
+    let focal = PixelFocal::from_fov_y(fov_y, cam.width, cam.height);
+    let eye = cam.position();
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let local = Vec3::new(
+                (x as f32 + 0.5 - 0.5 * cam.width as f32) / focal.fx,
+                -(y as f32 + 0.5 - 0.5 * cam.height as f32) / focal.fy,
+                -1.0,
+            );
+            let dir = cam.world_from_view.transform_vector3(local).normalize();
+            let t = (d - n.dot(eye)) / n.dot(dir);
+            if t > 0.0 && inside(eye + dir * t) {
+                sum += luminance(img.get(x, y)) as f64;
+                count += 1;
+            }
+        }
+    }
+    ((sum / count.max(1) as f64) as f32, count)
 }

@@ -7,6 +7,6 @@ pub mod technique;
 pub mod tracer;
 
 pub use image::CausticImage;
-pub use metrics::{ImageMetrics, compare};
+pub use metrics::{ImageMetrics, compare, plane_region_mean};
 pub use technique::{CausticsReferenceImage, ReferenceProgress, ReferenceStatus};
 pub use tracer::{TraceOutput, TraceSettings, TraceStats, trace};

@@ -27,6 +27,7 @@ struct BvhHit {
     instance: u32,   // 0xffffffff: miss
     triangle: u32,   // index in the mesh
     uv: vec2<f32>,
+    slot: u32,       // index in bvh_triangles (BVH order), for per-triangle data
 }
 
 const BVH_INVALID: u32 = 0xffffffffu;
@@ -140,6 +141,7 @@ fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, 
                 (*best).instance = inst_index;
                 (*best).triangle = bitcast<u32>(a.w);
                 (*best).uv = h.yz;
+                (*best).slot = tri;
             }
         }
     }
@@ -147,7 +149,7 @@ fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, 
 
 // Closest hit along the world ray (o, d) in (tmin, tmax).
 fn bvh_closest_hit(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> BvhHit {
-    var best = BvhHit(tmax, BVH_INVALID, 0u, vec2(0.0));
+    var best = BvhHit(tmax, BVH_INVALID, 0u, vec2(0.0), 0u);
     if arrayLength(&tlas_nodes) < 2u {
         return best;
     }

@@ -5,7 +5,9 @@
 //! RGB; alpha unused). 32-bit floats, because focused sunlight exceeds f16's 65 504 lux.
 //! Every technique writes it, the composite reads it.
 
+pub mod aaps;
 pub mod composite;
+pub mod readback;
 
 use std::sync::{Arc, Mutex};
 
@@ -21,7 +23,7 @@ use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::sync_component::SyncComponent;
 use bevy::render::{Render, RenderApp, RenderSystems};
 
-use crate::components::{Caustics, CausticsDebugView};
+use crate::components::{AapsSettings, Caustics, CausticsDebugView, CausticsTechnique};
 use crate::reference::{CausticImage, CausticsReferenceImage};
 
 /// Format of the caustics buffer.
@@ -53,6 +55,12 @@ impl CausticsDispatchLog {
 /// The render-world copy of a camera's [`Caustics`] and of its technique's CPU result.
 #[derive(Component, Clone, Debug)]
 pub struct ExtractedCaustics {
+    /// The technique.
+    pub technique: CausticsTechnique,
+    /// AAPS settings (the camera's [`AapsSettings`] or the defaults).
+    pub aaps: AapsSettings,
+    /// Photon budget per light (the quality preset).
+    pub photons_per_light: u64,
     /// Composite as if albedo were 1.
     pub white_albedo: bool,
     /// The reference image to upload, with its serial.
@@ -64,18 +72,33 @@ impl SyncComponent for Caustics {
 }
 
 impl ExtractComponent for Caustics {
-    type QueryData = (&'static Caustics, Option<&'static CausticsReferenceImage>);
+    type QueryData = (
+        &'static Caustics,
+        Option<&'static CausticsReferenceImage>,
+        Option<&'static AapsSettings>,
+    );
     type QueryFilter = ();
     type Out = ExtractedCaustics;
 
     fn extract_component(
-        (c, reference): (&Caustics, Option<&CausticsReferenceImage>),
+        (c, reference, aaps): (
+            &Caustics,
+            Option<&CausticsReferenceImage>,
+            Option<&AapsSettings>,
+        ),
     ) -> Option<Self::Out> {
-        // Nothing to composite: the view carries no caustics components, and no pass runs.
-        let reference = reference.map(|r| (r.image.clone(), r.serial))?;
+        let reference = reference.map(|r| (r.image.clone(), r.serial));
+        // Nothing to composite for the reference technique before its first image: the view
+        // carries no caustics components, and no pass runs.
+        if c.technique == CausticsTechnique::Reference && reference.is_none() {
+            return None;
+        }
         Some(ExtractedCaustics {
+            technique: c.technique,
+            aaps: aaps.cloned().unwrap_or_default(),
+            photons_per_light: c.quality.photons_per_light(),
             white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
-            reference: Some(reference),
+            reference,
         })
     }
 }
@@ -94,7 +117,7 @@ pub struct ViewCausticsBuffer {
 }
 
 /// Create (or resize) each caustics view's buffer and upload a new reference image.
-fn prepare_caustics_buffers(
+pub(crate) fn prepare_caustics_buffers(
     mut commands: Commands,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -129,6 +152,7 @@ fn prepare_caustics_buffers(
                     format: CAUSTICS_BUFFER_FORMAT,
                     usage: TextureUsages::TEXTURE_BINDING
                         | TextureUsages::STORAGE_BINDING
+                        | TextureUsages::RENDER_ATTACHMENT
                         | TextureUsages::COPY_DST
                         | TextureUsages::COPY_SRC,
                     view_formats: &[],
@@ -143,7 +167,10 @@ fn prepare_caustics_buffers(
                 new_buffer.as_mut().unwrap()
             }
         };
-        if let Some((image, serial)) = &caustics.reference
+        if let Some((image, serial)) = caustics
+            .reference
+            .as_ref()
+            .filter(|_| caustics.technique == CausticsTechnique::Reference)
             && *serial != buffer.uploaded
             && image.width == size.x
             && image.height == size.y
@@ -191,6 +218,8 @@ pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
 pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
     composite::build(app);
+    aaps::build(app);
+    readback::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };

@@ -80,3 +80,184 @@ fn optics_floor_square(d: f32) -> u32 {
     return k * k;
 }
 
+
+// fresnel_schlick (src/optics/fresnel.rs).
+fn optics_fresnel_schlick(cos_i: f32, f0: vec3<f32>) -> vec3<f32> {
+    let c = 1.0 - min(abs(cos_i), 1.0);
+    let c5 = c * c * c * c * c;
+    return clamp(f0 + (vec3(1.0) - f0) * c5, vec3(0.0), vec3(1.0));
+}
+
+// beer_lambert (src/optics/mod.rs); a distance >= 3e38 means a clear medium.
+fn optics_beer_lambert(color: vec3<f32>, dist: f32, len: f32) -> vec3<f32> {
+    if !(dist > 0.0) || dist >= 3.0e38 || !(len > 0.0) {
+        return vec3(1.0);
+    }
+    let x = min(len / dist, 1.0e6);
+    let c = clamp(color, vec3(0.0), vec3(1.0));
+    return pow(c, vec3(x));
+}
+
+// spot_attenuation (src/optics/sampling.rs), with the cosines precomputed.
+fn optics_spot_attenuation(cos_angle: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    let scale = 1.0 / max(cos_inner - cos_outer, 1.0e-4);
+    let a = clamp(cos_angle * scale - cos_outer * scale, 0.0, 1.0);
+    return a * a;
+}
+
+// orthonormal_basis (src/optics/sampling.rs): Duff et al. 2017. Returns (t, b) as two columns.
+fn optics_orthonormal_basis(n: vec3<f32>) -> mat2x3<f32> {
+    let sign = select(1.0, -1.0, n.z < 0.0 || (n.z == 0.0 && bitcast<u32>(n.z) == 0x80000000u));
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return mat2x3<f32>(
+        vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3(b, sign + n.y * n.y * a, -n.y),
+    );
+}
+
+// offset_ray_origin (src/optics/offset.rs): Wächter and Binder, scaled by the scene size.
+fn optics_offset_ray_origin(p: vec3<f32>, n: vec3<f32>, scene_scale: f32) -> vec3<f32> {
+    var s = 1.0;
+    if scene_scale > 0.0 && scene_scale < 3.0e38 {
+        s = clamp(scene_scale, 1.0e-6, 1.0e6);
+    }
+    let origin_band = s / 32.0;
+    let float_scale = s / 65536.0;
+    var out = p;
+    for (var i = 0; i < 3; i += 1) {
+        let of_i = i32(256.0 * n[i]);
+        let bits = bitcast<i32>(p[i]);
+        let shifted = select(bits + of_i, bits - of_i, p[i] < 0.0);
+        let p_i = bitcast<f32>(shifted);
+        if abs(p[i]) < origin_band {
+            out[i] = p[i] + float_scale * n[i];
+        } else if abs(p_i) <= 3.4028235e38 {
+            out[i] = p_i;
+        }
+    }
+    return out;
+}
+
+// transfer_to_plane (src/optics/aaps.rs): where the ray (o, d) meets the plane through p with
+// normal n; w = 1 on success, w = 0 (and p) when parallel or not finite.
+fn optics_transfer_to_plane(o: vec3<f32>, d: vec3<f32>, p: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
+    let den = dot(d, n);
+    if !(abs(den) >= 1.0e-12) || abs(den) > 3.0e38 {
+        return vec4(p, 0.0);
+    }
+    let t = dot(p - o, n) / den;
+    let q = o + d * t;
+    if !(all(abs(q) <= vec3(3.4028235e38))) {
+        return vec4(p, 0.0);
+    }
+    return vec4(q, 1.0);
+}
+
+struct OpticsSplat {
+    a: vec3<f32>,
+    b: vec3<f32>,
+    clamped: bool,
+}
+
+fn optics_finite3(v: vec3<f32>) -> vec3<f32> {
+    return select(vec3(0.0), v, all(abs(v) <= vec3(3.4028235e38)));
+}
+
+// splat_from_differentials (src/optics/aaps.rs): the ellipse with the second moments of the
+// parallelogram (du, dv) in the plane of n, anisotropy <= max_aniso, semi-axes in [lo, hi].
+fn optics_splat_from_differentials(du: vec3<f32>, dv: vec3<f32>, n_in: vec3<f32>, max_aniso: f32, lo_in: f32, hi_in: f32) -> OpticsSplat {
+    let ln = length(n_in);
+    let n = select(vec3(0.0, 1.0, 0.0), n_in / ln, ln > 0.0 && ln < 3.0e38);
+    let tb = optics_orthonormal_basis(n);
+    let t = tb[0];
+    let b = tb[1];
+    let du_f = optics_finite3(du);
+    let dv_f = optics_finite3(dv);
+    let p = vec2(dot(du_f, t), dot(du_f, b));
+    let q = vec2(dot(dv_f, t), dot(dv_f, b));
+    let m00 = p.x * p.x + q.x * q.x;
+    let m01 = p.x * p.y + q.x * q.y;
+    let m11 = p.y * p.y + q.y * q.y;
+    let tr = m00 + m11;
+    let disc = sqrt(max((m00 - m11) * (m00 - m11) * 0.25 + m01 * m01, 0.0));
+    let l1 = max(0.5 * tr + disc, 0.0);
+    let l2 = max(0.5 * tr - disc, 0.0);
+    var axis = vec2(1.0, 0.0);
+    if abs(m01) > 1.0e-30 {
+        let v = vec2(l1 - m11, m01);
+        let lv = length(v);
+        axis = select(vec2(1.0, 0.0), v / lv, lv > 0.0 && lv < 3.0e38);
+    } else if m00 < m11 {
+        axis = vec2(0.0, 1.0);
+    }
+    var ra = sqrt(l1);
+    var rb = sqrt(l2);
+    let lo = max(lo_in, 0.0);
+    var hi = 3.4028235e38;
+    if hi_in < 3.0e38 && hi_in >= lo {
+        hi = hi_in;
+    }
+    var aniso = 3.4028235e38;
+    if max_aniso < 3.0e38 {
+        aniso = max(max_aniso, 1.0);
+    }
+    let orig_a = ra;
+    let orig_b = rb;
+    ra = select(hi, clamp(ra, lo, hi), ra <= 3.4028235e38);
+    rb = select(lo, clamp(rb, lo, hi), rb <= 3.4028235e38);
+    rb = min(max(rb, ra / aniso), ra);
+    let a3 = t * axis.x + b * axis.y;
+    let b3 = cross(n, a3);
+    return OpticsSplat(a3 * ra, b3 * rb, ra != orig_a || rb != orig_b);
+}
+
+fn optics_nonneg(x: f32) -> f32 {
+    return select(0.0, max(x, 0.0), abs(x) <= 3.4028235e38);
+}
+
+// suggested_density (src/optics/aaps.rs): D' = D A / A_t + v g.
+fn optics_suggested_density(d: f32, area: f32, target_area: f32, variance: f32, gain: f32) -> f32 {
+    var ratio = 1.0;
+    if target_area > 0.0 && target_area <= 3.4028235e38 {
+        ratio = optics_nonneg(area) / target_area;
+    }
+    let out = optics_nonneg(d) * ratio + optics_nonneg(variance) * optics_nonneg(gain);
+    return select(3.4028235e38, out, out <= 3.4028235e38);
+}
+
+// blend_density (src/optics/aaps.rs) with unit neighbour weights: `previous` holds the previous
+// densities of the texel and its neighbours (the first `count`).
+fn optics_blend_density(suggested: f32, previous: array<f32, 5>, count: u32, w_t_in: f32, min_density: f32, max_density: f32) -> f32 {
+    var w_t = 1.0;
+    if abs(w_t_in) <= 3.4028235e38 {
+        w_t = clamp(w_t_in, 0.0, 1.0);
+    }
+    var sw = 0.0;
+    var sd = 0.0;
+    for (var i = 0u; i < min(count, 5u); i += 1u) {
+        let d = previous[i];
+        if abs(d) <= 3.4028235e38 {
+            sw += 1.0;
+            sd += d;
+        }
+    }
+    let spatial = select(suggested, sd / sw, sw > 0.0);
+    let lo = max(min_density, 1.0);
+    var hi = 3.4028235e38;
+    if max_density <= 3.4028235e38 && max_density >= lo {
+        hi = max_density;
+    }
+    let d = clamp(w_t * suggested + (1.0 - w_t) * spatial, lo, min(hi, 16777216.0));
+    return f32(max(max(optics_floor_square(d), optics_floor_square(lo)), 1u));
+}
+
+// scale_to_budget (src/optics/aaps.rs).
+fn optics_scale_to_budget(d: f32, sum: f32, budget: f32, min_density: f32) -> f32 {
+    var s = 1.0;
+    if sum > budget && sum > 0.0 && budget >= 0.0 && sum <= 3.4028235e38 {
+        s = budget / sum;
+    }
+    let lo = optics_floor_square(max(min_density, 1.0));
+    return f32(max(optics_floor_square(d * s), lo));
+}

@@ -1,10 +1,11 @@
 // The AAPS task-buffer quadtree walk: WGSL twin of `SumQuadtree::walk` (src/optics/aaps.rs),
 // tested against it on lavapipe (tests/gpu.rs, wgsl_quadtree_walk_matches_rust).
 
-@group(0) @binding(0) var<storage, read> qt_levels: array<u32>;
+// Read-write so the AAPS build passes can share the binding (group 0, binding 7).
+@group(0) @binding(7) var<storage, read_write> qt_levels: array<u32>;
 
 // SumQuadtree::walk (src/optics/aaps.rs) over a tree stored level by level from the leaves
-// (`size x size`) to the root (1 x 1), concatenated in `qt_levels` (group 0, binding 0). Returns (texel.x, texel.y,
+// (`size x size`) to the root (1 x 1), concatenated in `qt_levels` (group 0, binding 7). Returns (texel.x, texel.y,
 // sample in the leaf, samples in the leaf), or count 0 for a task past the total.
 fn quadtree_walk(size: u32, task: u32) -> vec4<u32> {
     // Offsets of each level: level k has (size >> k)^2 entries.

@@ -14,7 +14,9 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::{Blas, Tlas};
+use glam::Vec2;
+
+use super::{Blas, Surface, Tlas};
 
 /// One instance on the GPU (64 bytes).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -41,6 +43,55 @@ pub struct GpuBvh {
     pub tlas_nodes: Vec<[f32; 4]>,
     /// TLAS leaf slots to instance indices.
     pub tlas_prims: Vec<u32>,
+    /// Vertex shading normals of every triangle (object space).
+    pub normals: Vec<[f32; 4]>,
+    /// Material of every instance.
+    pub materials: Vec<[f32; 4]>,
+}
+
+/// Material kinds on the GPU.
+pub const GPU_DIFFUSE: u32 = 0;
+/// A dielectric interface.
+pub const GPU_DIELECTRIC: u32 = 1;
+/// A conductor mirror.
+pub const GPU_CONDUCTOR: u32 = 2;
+
+/// The three `vec4` rows of a surface: `(kind, ior, thin, attenuation distance)`,
+/// `(attenuation colour, 0)`, `(albedo or f0, 0)`. A clear medium's distance is `3e38`
+/// (finite, so no infinity reaches a buffer).
+pub fn material_rows(surface: &Surface) -> [[f32; 4]; 3] {
+    let k = |k: u32| f32::from_bits(k);
+    match *surface {
+        Surface::Diffuse { albedo } => [
+            [k(GPU_DIFFUSE), 1.0, 0.0, 3e38],
+            [1.0, 1.0, 1.0, 0.0],
+            [albedo.x, albedo.y, albedo.z, 0.0],
+        ],
+        Surface::Dielectric {
+            ior,
+            attenuation_color: c,
+            attenuation_distance,
+            thin,
+        } => [
+            [
+                k(GPU_DIELECTRIC),
+                ior,
+                if thin { 1.0 } else { 0.0 },
+                if attenuation_distance.is_finite() {
+                    attenuation_distance.min(3e38)
+                } else {
+                    3e38
+                },
+            ],
+            [c.x, c.y, c.z, 0.0],
+            [1.0, 1.0, 1.0, 0.0],
+        ],
+        Surface::Conductor { f0 } => [
+            [k(GPU_CONDUCTOR), 1.0, 0.0, 3e38],
+            [1.0, 1.0, 1.0, 0.0],
+            [f0.x, f0.y, f0.z, 0.0],
+        ],
+    }
 }
 
 fn push_nodes(
@@ -80,9 +131,14 @@ impl GpuBvh {
                     out.triangles.push([v0.x, v0.y, v0.z, f32::from_bits(src)]);
                     out.triangles.push([e1.x, e1.y, e1.z, 0.0]);
                     out.triangles.push([e2.x, e2.y, e2.z, 0.0]);
+                    for bary in [Vec2::ZERO, Vec2::X, Vec2::Y] {
+                        let n = inst.blas.normals(src, bary).1;
+                        out.normals.push([n.x, n.y, n.z, 0.0]);
+                    }
                 }
                 node_base
             });
+            out.materials.extend(material_rows(&inst.surface));
             let m = inst.local_from_world;
             let (x, y, z, t) = (
                 m.matrix3.x_axis,

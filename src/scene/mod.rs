@@ -8,4 +8,5 @@ pub mod model;
 
 pub use bvh::{Blas, Hit, Instance, MeshGeometry, Tlas};
 pub use collect::{CausticsScene, ScenePlugin};
+pub use gpu::GpuBvh;
 pub use model::*;

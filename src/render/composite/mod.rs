@@ -26,7 +26,9 @@ use bevy::render::view::{ExtractedView, ViewTarget};
 use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderStartup, RenderSystems};
 use bevy::shader::Shader;
 
+use super::aaps::view::AapsFrame;
 use super::{CausticsDispatchLog, ExtractedCaustics, ViewCausticsBuffer};
+use crate::components::CausticsTechnique;
 
 /// GPU time span and dispatch-log name of this pass.
 pub const COMPOSITE_PASS: &str = "caustics/composite";
@@ -124,20 +126,26 @@ pub fn composite_caustics(
         &ExtractedCamera,
         &ExtractedCaustics,
         &CompositePipelineId,
+        Option<&AapsFrame>,
     )>,
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,
     log: Res<CausticsDispatchLog>,
     mut ctx: RenderContext,
 ) {
-    let (target, prepass, buffer, camera, caustics, id) = view.into_inner();
+    let (target, prepass, buffer, camera, caustics, id, aaps) = view.into_inner();
     let (Some(render_pipeline), Some(gbuffer)) =
         (cache.get_render_pipeline(**id), prepass.deferred_view())
     else {
         return;
     };
-    if buffer.uploaded == 0 && caustics.reference.is_some() {
+    let filled = match caustics.technique {
         // The image is not in the buffer yet (size mismatch while the view resizes).
+        CausticsTechnique::Reference => buffer.uploaded != 0,
+        // AAPS fills it this frame, or has nothing to do.
+        CausticsTechnique::Aaps => aaps.is_some(),
+    };
+    if !filled {
         return;
     }
     let mut params = [0u8; 16];

@@ -1,0 +1,115 @@
+use bevy::prelude::*;
+
+/// Settings of the [`crate::CausticsTechnique::Aaps`] technique (adaptive anisotropic photon
+/// scattering, seed 004). Put it on the camera next to [`crate::Caustics`]; without it the
+/// defaults below are used. Defaults follow the thesis where it gives a value (sections 3.2
+/// and 4.3) and are marked "ours" where it does not.
+///
+/// The photon budget comes from [`crate::Caustics::quality`]: `photons_per_light` times the
+/// number of caustic lights bounds the photons emitted per frame.
+#[derive(Component, Reflect, Clone, Debug, PartialEq)]
+#[reflect(Component, Default, Clone)]
+pub struct AapsSettings {
+    /// Side of each light's ray-density texture in the atlas, texels. Default 128 (the
+    /// original authors'; the thesis used 256). Power of two in [8, 1024]; other values are
+    /// rounded to the nearest power of two. Cost: the task-buffer update scales with its
+    /// square, and the minimum photon count is `4 · side²` per light.
+    pub atlas_resolution: u32,
+    /// Screen-space splat area the density update aims for, pixels. Default 19 (the thesis's
+    /// best RMSE on its Pool scene, section 4.3). Smaller: more photons, sharper, slower.
+    pub target_area: f32,
+    /// Variance gain `g` of `D' = D A / A_t + v g`: photons added per unit of relative
+    /// temporal variance. Default 4 (ours). 0 switches the variance term off.
+    pub variance_gain: f32,
+    /// Temporal weight `w_t` of the density blend (section 3.1.5): 1 keeps only the new
+    /// suggestion, 0 only the neighbours' previous values. Default 0.5 (ours).
+    pub temporal_weight: f32,
+    /// Minimum ray density per texel. Default 4 (section 3.2.2). At least 1.
+    pub min_density: f32,
+    /// Maximum ray density per texel; 0 means none. Default 0 (the thesis's experiments).
+    pub max_density: f32,
+    /// Large-splat threshold (section 3.3.5): the solid angle of a splat seen from its last
+    /// specular interaction, `area / distance²`, in steradians. Splats above it do not steer
+    /// the density (a grazing photon would otherwise ask for unbounded photons), and with
+    /// `drop_large_splats` they are culled. Default 0.05 sr (ours; the thesis's lowest tried
+    /// value was 0.0014). 0 disables both.
+    pub cull_solid_angle: f32,
+    /// Cull the splats above `cull_solid_angle` (the thesis's performance culling). Default
+    /// false: culled splats take their energy with them (22 % of the `ring` scene's caustic
+    /// at 0.05 sr), so the default keeps them and stays energy-conserving. Cost when false:
+    /// fill rate of the few very large splats.
+    pub drop_large_splats: bool,
+    /// Small-splat MSAA (section 5.1.3): splats whose screen area is under this many pixels
+    /// are drawn into a 4x multisampled target with per-sample shading, then resolved and
+    /// added. Default 4 px (ours). 0 switches it off. Cost: one resolve per frame.
+    pub msaa_threshold: f32,
+    /// Size of a splat relative to its photon's footprint: the ellipse's semi-axes are this
+    /// times the singular values of the two differential offsets (which span one grid cell of
+    /// the photon's texel). The thesis leaves it open. Default 1.5 (ours: on the test scenes
+    /// at 128², 1.0 leaves sub-pixel gaps, RMSE 321 on `glass_sphere`; 1.5 gives 164, 2.5 gives
+    /// 102 but blurs, FLIP 0.029 → 0.032 and 0.049 → 0.089 on `ring`). Range [0.1, 16].
+    pub splat_scale: f32,
+    /// Largest ratio of a splat's axes (section 3.1.2: "anisotropy is limited"). Default 16
+    /// (ours). At least 1.
+    pub max_anisotropy: f32,
+    /// Specular interactions followed per photon before it is dropped. Default 8 (ours).
+    /// Range [1, 32].
+    pub max_bounces: u32,
+    /// Capacity of the splat buffer, splats. Default 2 097 152 (128 MiB). Splats past it are
+    /// counted as overflow and not drawn.
+    pub splat_capacity: u32,
+    /// Adapt the density every frame. Default true. `false` freezes it at the uniform
+    /// density the budget allows (for comparisons).
+    pub adaptive: bool,
+}
+
+impl Default for AapsSettings {
+    fn default() -> Self {
+        Self {
+            atlas_resolution: 128,
+            target_area: 19.0,
+            variance_gain: 4.0,
+            temporal_weight: 0.5,
+            min_density: 4.0,
+            max_density: 0.0,
+            cull_solid_angle: 0.05,
+            drop_large_splats: false,
+            msaa_threshold: 4.0,
+            splat_scale: 1.5,
+            max_anisotropy: 16.0,
+            max_bounces: 8,
+            splat_capacity: 1 << 21,
+            adaptive: true,
+        }
+    }
+}
+
+impl AapsSettings {
+    /// A copy with every field in range (what the GPU passes use).
+    pub fn sanitized(&self) -> Self {
+        let finite = |x: f32, d: f32| if x.is_finite() { x } else { d };
+        let res = self.atlas_resolution.clamp(8, 1024);
+        let res = if res.is_power_of_two() {
+            res
+        } else {
+            let up = res.next_power_of_two();
+            if up - res <= res - up / 2 { up } else { up / 2 }
+        };
+        Self {
+            atlas_resolution: res.clamp(8, 1024),
+            target_area: finite(self.target_area, 19.0).max(0.01),
+            variance_gain: finite(self.variance_gain, 0.0).max(0.0),
+            temporal_weight: finite(self.temporal_weight, 0.5).clamp(0.0, 1.0),
+            min_density: finite(self.min_density, 4.0).clamp(1.0, 1.0e6),
+            max_density: finite(self.max_density, 0.0).max(0.0),
+            cull_solid_angle: finite(self.cull_solid_angle, 0.0).max(0.0),
+            drop_large_splats: self.drop_large_splats,
+            msaa_threshold: finite(self.msaa_threshold, 0.0).max(0.0),
+            splat_scale: finite(self.splat_scale, 1.5).clamp(0.1, 16.0),
+            max_anisotropy: finite(self.max_anisotropy, 16.0).max(1.0),
+            max_bounces: self.max_bounces.clamp(1, 32),
+            splat_capacity: self.splat_capacity.clamp(1, 1 << 24),
+            adaptive: self.adaptive,
+        }
+    }
+}

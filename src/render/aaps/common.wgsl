@@ -1,0 +1,78 @@
+// Bindings and counters shared by the AAPS compute passes (group 0; bvh.wgsl holds 0 to 4 and
+// quadtree.wgsl binding 7). Concatenated after bvh.wgsl, optics.wgsl, quadtree.wgsl and
+// params.wgsl by src/render/aaps/pipelines.rs.
+
+@group(0) @binding(5) var<storage, read> bvh_normals: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> materials: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read> lights: array<AapsLight>;
+@group(0) @binding(9) var<uniform> params: AapsParams;
+@group(0) @binding(10) var<storage, read_write> splats: array<AapsSplat>;
+@group(0) @binding(11) var<storage, read_write> accum: array<atomic<u32>>;
+@group(0) @binding(12) var<storage, read_write> density: array<f32>;
+@group(0) @binding(13) var<storage, read_write> density_next: array<f32>;
+@group(0) @binding(14) var caustics_now: texture_2d<f32>;
+@group(0) @binding(15) var caustics_prev: texture_2d<f32>;
+
+// One light (80 bytes, `AapsLight` in src/render/aaps/scene.rs).
+struct AapsLight {
+    position: vec4<f32>, // xyz: point/spot position or the directional grid's corner; w kind
+    axis: vec4<f32>,     // xyz: travel direction (directional) or spot axis; w cos outer
+    side_u: vec4<f32>,   // directional grid edge along u; w cos inner
+    side_v: vec4<f32>,   // directional grid edge along v
+    power: vec4<f32>,    // rgb: power over the whole parameter square (lm or lux m^2)
+}
+
+const LIGHT_DIRECTIONAL: u32 = 0u;
+const LIGHT_POINT: u32 = 1u;
+const LIGHT_SPOT: u32 = 2u;
+
+const MAT_DIFFUSE: u32 = 0u;
+const MAT_DIELECTRIC: u32 = 1u;
+const MAT_CONDUCTOR: u32 = 2u;
+
+// Counters (u32 words of `accum`; `AapsStats` in src/render/aaps/mod.rs reads the same).
+const C_TASKS: u32 = 0u;          // photons the quadtree asks for
+const C_EMITTED: u32 = 1u;        // photons traced
+const C_RESERVED: u32 = 2u;       // splat slots asked for
+const C_BIG: u32 = 3u;            // splats in the plain list
+const C_SMALL: u32 = 4u;          // splats in the MSAA list
+const C_OVERFLOW: u32 = 5u;       // splats that did not fit
+const C_CULL_FRUSTUM: u32 = 6u;   // splats outside the frustum or facing away
+const C_CULL_SIZE: u32 = 7u;      // splats above the solid-angle threshold
+const C_DROPPED: u32 = 8u;        // photons whose first hit is not a caster
+const C_CLAMPED: u32 = 9u;        // splats whose axes were clamped
+const C_NAN: u32 = 10u;           // non-finite values caught
+const C_MAX_DEPTH: u32 = 11u;     // paths stopped at max bounces
+const C_DENSITY_SUM: u32 = 12u;   // f32 bits: sum of the new densities
+const C_TIR: u32 = 13u;           // total internal reflections
+const C_PHOTON_OVERFLOW: u32 = 14u; // photons past the photon capacity
+const C_SPLIT: u32 = 15u;         // photons split at a dielectric
+const ACCUM_TEXELS: u32 = 32u;    // per texel: area sum (f32 bits), accepted count, variance (f32 bits), 0
+
+fn accum_add_f32(i: u32, v: f32) {
+    if !(abs(v) <= 3.0e38) {
+        return;
+    }
+    var old = atomicLoad(&accum[i]);
+    for (var k = 0u; k < 256u; k += 1u) {
+        let r = atomicCompareExchangeWeak(&accum[i], old, bitcast<u32>(bitcast<f32>(old) + v));
+        if r.exchanged {
+            return;
+        }
+        old = r.old_value;
+    }
+}
+
+fn accum_f32(i: u32) -> f32 {
+    return bitcast<f32>(atomicLoad(&accum[i]));
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+// The light index of an atlas texel (or a value >= lights for an unused tile).
+fn atlas_tile(texel: vec2<u32>) -> u32 {
+    let tile = params.atlas.y;
+    return (texel.y / tile) * params.atlas.z + texel.x / tile;
+}

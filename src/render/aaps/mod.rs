@@ -1,0 +1,136 @@
+//! The `Aaps` technique (seed 004, adaptive anisotropic photon scattering) on the GPU without
+//! ray-tracing hardware: compute-shader photon tracing through the scene BVH, anisotropic
+//! splats rasterised into the caustics buffer, and a task buffer that adapts each light's ray
+//! density every frame.
+//!
+//! Render-world only. Per frame and view (see [`passes`]): quadtree build from the density
+//! atlas, emit + trace (indirect dispatch sized on the GPU), splat (indirect draws, small-splat
+//! MSAA), variance by reprojection and the density update. Nothing is dispatched for a view
+//! whose technique is not `Aaps`, or when no caustic light reaches a caster.
+
+pub mod passes;
+pub mod pipelines;
+pub mod scene;
+pub mod view;
+
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::pbr::deferred::deferred_lighting;
+use bevy::prelude::*;
+use bevy::render::render_resource::{TextureFormat, TextureFormatFeatureFlags, WgpuFeatures};
+use bevy::render::renderer::{RenderAdapter, RenderDevice};
+use bevy::render::{ExtractSchedule, MainWorld, Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::shader::Shader;
+
+use crate::scene::CausticsScene;
+use scene::ExtractedCausticsScene;
+
+/// What the adapter offers AAPS (render world).
+#[derive(Resource, Clone, Debug, Default)]
+pub struct AapsSupport {
+    /// `Rgba32Float` can be multisampled 4x and resolved (small-splat MSAA).
+    pub msaa: bool,
+}
+
+/// What AAPS needs of the GPU, as a list of what is missing.
+pub fn missing_aaps_capabilities(features: WgpuFeatures, storage_buffers: u32) -> Vec<String> {
+    let mut missing = Vec::new();
+    if !features.contains(WgpuFeatures::FLOAT32_BLENDABLE) {
+        missing.push("Features::FLOAT32_BLENDABLE (additive splats into Rgba32Float)".into());
+    }
+    if storage_buffers < 14 {
+        missing.push(format!(
+            "max_storage_buffers_per_shader_stage >= 14 (have {storage_buffers})"
+        ));
+    }
+    missing
+}
+
+fn extract_scene(
+    mut commands: Commands,
+    main: Res<MainWorld>,
+    current: Option<Res<ExtractedCausticsScene>>,
+) {
+    let Some(scene) = main.get_resource::<CausticsScene>() else {
+        return;
+    };
+    if current.is_some_and(|c| c.0.generation == scene.generation) {
+        return;
+    }
+    commands.insert_resource(ExtractedCausticsScene(scene.clone()));
+}
+
+/// Render-app part; called from [`crate::render::build`] after the capability gate.
+pub(crate) fn build(app: &mut App) {
+    let (features, storage, msaa) = {
+        let Some(render_app) = app.get_sub_app(RenderApp) else {
+            return;
+        };
+        let w = render_app.world();
+        let (Some(device), Some(adapter)) = (
+            w.get_resource::<RenderDevice>(),
+            w.get_resource::<RenderAdapter>(),
+        ) else {
+            return;
+        };
+        let f = adapter.get_texture_format_features(TextureFormat::Rgba32Float);
+        let msaa = f.flags.sample_count_supported(4)
+            && f.flags
+                .contains(TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE)
+            && device
+                .features()
+                .contains(WgpuFeatures::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+        (
+            device.features(),
+            device.limits().max_storage_buffers_per_shader_stage,
+            msaa,
+        )
+    };
+    let missing = missing_aaps_capabilities(features, storage);
+    if !missing.is_empty() {
+        warn!(
+            "bevy_caustics: the Aaps technique is disabled: the GPU lacks {}",
+            missing.join(", ")
+        );
+        return;
+    }
+    if !msaa {
+        warn!(
+            "bevy_caustics: small-splat MSAA is off: Rgba32Float cannot be multisampled 4x and resolved here"
+        );
+    }
+    let shaders = {
+        let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
+        pipelines::AapsShaders {
+            compute: shaders.add(Shader::from_wgsl(
+                pipelines::compute_source(),
+                "bevy_caustics/aaps_compute.wgsl",
+            )),
+            splat: shaders.add(Shader::from_wgsl(
+                pipelines::splat_source(),
+                "bevy_caustics/aaps_splat.wgsl",
+            )),
+        }
+    };
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app
+        .insert_resource(shaders)
+        .insert_resource(AapsSupport { msaa })
+        .add_systems(RenderStartup, pipelines::init_aaps_pipelines)
+        .add_systems(ExtractSchedule, extract_scene)
+        .add_systems(
+            Render,
+            (view::prepare_aaps_scene, view::prepare_aaps_views)
+                .chain()
+                .in_set(RenderSystems::PrepareResources)
+                .after(super::prepare_caustics_buffers),
+        )
+        .add_systems(
+            Core3d,
+            passes::aaps_passes
+                .in_set(Core3dSystems::MainPass)
+                .after(deferred_lighting)
+                .before(super::composite::composite_caustics),
+        );
+}

@@ -1,0 +1,309 @@
+//! The AAPS passes of one view, in `Core3d` after the prepass (the splats need the view depth)
+//! and before the composite. No CPU readback: the photon and splat counts stay on the GPU and
+//! drive the indirect dispatches and draws.
+
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::prelude::*;
+use bevy::render::diagnostic::RecordDiagnostics;
+use bevy::render::render_resource::{
+    BindGroup, BindGroupEntries, BindGroupEntry, BindingResource, BufferBinding,
+    ComputePassDescriptor, Extent3d, LoadOp, Operations, PipelineCache, RenderPassColorAttachment,
+    RenderPassDescriptor, StoreOp, TexelCopyTextureInfo,
+};
+use bevy::render::renderer::{RenderContext, ViewQuery};
+
+use super::pipelines::AapsPipelines;
+use super::scene::AapsSceneBuffers;
+use super::view::{AapsFrame, AapsViewState, LEVEL_STRIDE};
+use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
+
+/// GPU span and log names of the passes.
+pub const TASK_PASS: &str = "caustics/aaps/task_buffer";
+/// Emit and trace (with the argument writers).
+pub const TRACE_PASS: &str = "caustics/aaps/trace";
+/// Plain splats.
+pub const SPLAT_PASS: &str = "caustics/aaps/splat";
+/// Small splats into the MSAA target, resolved into the caustics buffer.
+pub const SPLAT_MSAA_PASS: &str = "caustics/aaps/splat_msaa";
+/// Variance and density update.
+pub const UPDATE_PASS: &str = "caustics/aaps/update";
+/// Every AAPS pass, in order.
+pub const ALL_PASSES: [&str; 5] = [
+    TASK_PASS,
+    TRACE_PASS,
+    SPLAT_MSAA_PASS,
+    SPLAT_PASS,
+    UPDATE_PASS,
+];
+
+/// Names of the counters read into diagnostics (`render/caustics/aaps/<name>`), with their word
+/// in the `accum` buffer (`C_*` in common.wgsl).
+pub const COUNTERS: [(&str, u64); 11] = [
+    ("caustics/aaps/tasks", 0),
+    ("caustics/aaps/photons_emitted", 1),
+    ("caustics/aaps/splats_plain", 3),
+    ("caustics/aaps/splats_msaa", 4),
+    ("caustics/aaps/splat_overflow", 5),
+    ("caustics/aaps/culled_frustum", 6),
+    ("caustics/aaps/culled_size", 7),
+    ("caustics/aaps/dropped", 8),
+    ("caustics/aaps/clamped", 9),
+    ("caustics/aaps/nan_guards", 10),
+    ("caustics/aaps/photon_overflow", 14),
+];
+
+/// All passes of the view.
+#[allow(clippy::type_complexity)]
+pub fn aaps_passes(
+    view: ViewQuery<(
+        &ViewCausticsBuffer,
+        &ViewPrepassTextures,
+        &AapsViewState,
+        &AapsFrame,
+    )>,
+    scene: Option<Res<AapsSceneBuffers>>,
+    pipelines: Res<AapsPipelines>,
+    cache: Res<PipelineCache>,
+    log: Res<CausticsDispatchLog>,
+    mut ctx: RenderContext,
+) {
+    let (buffer, prepass, state, _) = view.into_inner();
+    let Some(scene) = scene else {
+        return;
+    };
+    let Some(depth) = prepass.depth_view() else {
+        return;
+    };
+    let compute: Vec<_> = pipelines
+        .compute
+        .iter()
+        .filter_map(|id| cache.get_compute_pipeline(*id))
+        .collect();
+    let Some(splat) = cache.get_render_pipeline(pipelines.splat) else {
+        return;
+    };
+    let splat_msaa = pipelines
+        .splat_msaa
+        .and_then(|id| cache.get_render_pipeline(id));
+    if compute.len() != pipelines.compute.len() {
+        return;
+    }
+    let [
+        leaves,
+        reduce,
+        trace_args,
+        trace,
+        draw_args,
+        variance,
+        update,
+        scale,
+    ] = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| compute[i]);
+    let device = ctx.render_device().clone();
+    let b = &scene.buffers;
+    let main: BindGroup = device.create_bind_group(
+        "caustics:bind_group:aaps",
+        &cache.get_bind_group_layout(&pipelines.compute_layout),
+        &BindGroupEntries::sequential((
+            b[0].as_entire_binding(),
+            b[1].as_entire_binding(),
+            b[2].as_entire_binding(),
+            b[3].as_entire_binding(),
+            b[4].as_entire_binding(),
+            b[5].as_entire_binding(),
+            b[6].as_entire_binding(),
+            state.quadtree.as_entire_binding(),
+            b[7].as_entire_binding(),
+            state.params.as_entire_binding(),
+            state.splats.as_entire_binding(),
+            state.accum.as_entire_binding(),
+            state.density[0].as_entire_binding(),
+            state.density[1].as_entire_binding(),
+            &buffer.view,
+            &state.history.1,
+            BindingResource::Buffer(BufferBinding {
+                buffer: &state.levels,
+                offset: 0,
+                size: Some(core::num::NonZeroU64::new(16).unwrap()),
+            }),
+        )),
+    );
+    let args = device.create_bind_group(
+        "caustics:bind_group:aaps_args",
+        &cache.get_bind_group_layout(&pipelines.args_layout),
+        &[BindGroupEntry {
+            binding: 0,
+            resource: state.args.as_entire_binding(),
+        }],
+    );
+    let splat_group = device.create_bind_group(
+        "caustics:bind_group:aaps_splat",
+        &cache.get_bind_group_layout(&pipelines.splat_layout),
+        &BindGroupEntries::sequential((
+            state.params.as_entire_binding(),
+            state.splats.as_entire_binding(),
+            depth,
+            state.world_from_clip.as_entire_binding(),
+        )),
+    );
+    let [atlas, ..] = state.key.atlas;
+    let texel_groups = (atlas * atlas).div_ceil(64);
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+
+    // Last frame's result becomes the history of the variance pass.
+    ctx.command_encoder().copy_texture_to_texture(
+        TexelCopyTextureInfo {
+            texture: &buffer.texture,
+            mip_level: 0,
+            origin: Default::default(),
+            aspect: Default::default(),
+        },
+        TexelCopyTextureInfo {
+            texture: &state.history.0,
+            mip_level: 0,
+            origin: Default::default(),
+            aspect: Default::default(),
+        },
+        Extent3d {
+            width: buffer.size.x,
+            height: buffer.size.y,
+            depth_or_array_layers: 1,
+        },
+    );
+    ctx.command_encoder().clear_buffer(&state.accum, 0, None);
+
+    // Task buffer: quadtree leaves from the density atlas, reduction to the root, and the
+    // trace dispatch size from the root.
+    {
+        let encoder = ctx.command_encoder();
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("caustics_aaps_task_buffer"),
+            timestamp_writes: None,
+        });
+        let span = diagnostics.pass_span(&mut pass, TASK_PASS);
+        pass.set_pipeline(leaves);
+        pass.set_bind_group(0, &main, &[0]);
+        pass.dispatch_workgroups(texel_groups, 1, 1);
+        pass.set_pipeline(reduce);
+        for k in 0..state.reduce_steps {
+            let n = (atlas >> (k + 1)).max(1);
+            pass.set_bind_group(0, &main, &[(k as u64 * LEVEL_STRIDE) as u32]);
+            pass.dispatch_workgroups((n * n).div_ceil(64), 1, 1);
+        }
+        pass.set_pipeline(trace_args);
+        pass.set_bind_group(0, &main, &[0]);
+        pass.set_bind_group(1, &args, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        span.end(&mut pass);
+    }
+    log.record(TASK_PASS);
+
+    // Emit and trace, then the draw and variance arguments.
+    {
+        let encoder = ctx.command_encoder();
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("caustics_aaps_trace"),
+            timestamp_writes: None,
+        });
+        let span = diagnostics.pass_span(&mut pass, TRACE_PASS);
+        pass.set_pipeline(trace);
+        pass.set_bind_group(0, &main, &[0]);
+        pass.dispatch_workgroups_indirect(&state.args, 0);
+        span.end(&mut pass);
+    }
+    {
+        let encoder = ctx.command_encoder();
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("caustics_aaps_draw_args"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(draw_args);
+        pass.set_bind_group(0, &main, &[0]);
+        pass.set_bind_group(1, &args, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+    log.record(TRACE_PASS);
+
+    // Small splats first: the resolve overwrites the caustics buffer with them, then the plain
+    // splats are blended on top.
+    let mut cleared = false;
+    if let (Some(pipeline), Some((_, msaa_view))) = (splat_msaa, &state.msaa) {
+        let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+            label: Some("caustics_aaps_splat_msaa"),
+            color_attachments: &[Some(RenderPassColorAttachment {
+                view: msaa_view,
+                depth_slice: None,
+                resolve_target: Some(&buffer.view),
+                ops: Operations {
+                    load: LoadOp::Clear(Default::default()),
+                    store: StoreOp::Discard,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let span = diagnostics.pass_span(&mut pass, SPLAT_MSAA_PASS);
+        pass.set_render_pipeline(pipeline);
+        pass.set_bind_group(0, &splat_group, &[]);
+        pass.draw_indirect(&state.args, 12 * 4);
+        span.end(&mut pass);
+        cleared = true;
+        log.record(SPLAT_MSAA_PASS);
+    }
+    {
+        let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+            label: Some("caustics_aaps_splat"),
+            color_attachments: &[Some(RenderPassColorAttachment {
+                view: &buffer.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: Operations {
+                    load: if cleared {
+                        LoadOp::Load
+                    } else {
+                        LoadOp::Clear(Default::default())
+                    },
+                    store: StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
+        pass.set_render_pipeline(splat);
+        pass.set_bind_group(0, &splat_group, &[]);
+        pass.draw_indirect(&state.args, 8 * 4);
+        span.end(&mut pass);
+    }
+    log.record(SPLAT_PASS);
+
+    // Next frame's distribution: variance by reprojection, D' and the blend, the budget.
+    if state.settings.adaptive {
+        let encoder = ctx.command_encoder();
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("caustics_aaps_update"),
+            timestamp_writes: None,
+        });
+        let span = diagnostics.pass_span(&mut pass, UPDATE_PASS);
+        pass.set_bind_group(0, &main, &[0]);
+        pass.set_pipeline(variance);
+        pass.dispatch_workgroups_indirect(&state.args, 4 * 4);
+        pass.set_pipeline(update);
+        pass.dispatch_workgroups(texel_groups, 1, 1);
+        pass.set_pipeline(scale);
+        pass.dispatch_workgroups(texel_groups, 1, 1);
+        span.end(&mut pass);
+        log.record(UPDATE_PASS);
+    }
+    for (name, word) in COUNTERS {
+        diagnostics.record_u32(
+            ctx.command_encoder(),
+            &state.accum.slice(word * 4..word * 4 + 4),
+            name,
+        );
+    }
+}

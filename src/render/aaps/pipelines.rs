@@ -1,0 +1,190 @@
+//! The AAPS pipelines: one compute module (BVH, optics, quadtree, trace and task-buffer
+//! entry points, concatenated from the WGSL files beside this one and in `src/render/`) and
+//! the splat raster module; created in `RenderStartup`.
+
+use bevy::prelude::*;
+use bevy::render::render_resource::{
+    BindGroupLayoutDescriptor, BindGroupLayoutEntries, BlendComponent, BlendFactor, BlendOperation,
+    BlendState, CachedComputePipelineId, CachedRenderPipelineId, ColorTargetState, ColorWrites,
+    ComputePipelineDescriptor, FragmentState, MultisampleState, PipelineCache,
+    RenderPipelineDescriptor, ShaderStages, TextureSampleType, VertexState, binding_types,
+};
+use bevy::shader::Shader;
+
+use crate::render::CAUSTICS_BUFFER_FORMAT;
+
+/// The WGSL of the compute module.
+pub fn compute_source() -> String {
+    [
+        include_str!("../bvh.wgsl"),
+        include_str!("../optics.wgsl"),
+        include_str!("../quadtree.wgsl"),
+        include_str!("params.wgsl"),
+        include_str!("common.wgsl"),
+        include_str!("trace.wgsl"),
+        include_str!("task.wgsl"),
+    ]
+    .join("\n")
+}
+
+/// The WGSL of the splat module.
+pub fn splat_source() -> String {
+    [include_str!("params.wgsl"), include_str!("splat.wgsl")].join("\n")
+}
+
+/// Shader handles, added to `Assets<Shader>` by the plugin.
+#[derive(Resource, Clone)]
+pub struct AapsShaders {
+    /// Compute module.
+    pub compute: Handle<Shader>,
+    /// Splat module.
+    pub splat: Handle<Shader>,
+}
+
+/// Layouts and pipeline ids.
+#[derive(Resource)]
+pub struct AapsPipelines {
+    /// Group 0 of the compute passes.
+    pub compute_layout: BindGroupLayoutDescriptor,
+    /// Group 1 (indirect arguments) of the argument writers.
+    pub args_layout: BindGroupLayoutDescriptor,
+    /// Group 0 of the splat passes.
+    pub splat_layout: BindGroupLayoutDescriptor,
+    /// `qt_leaves`, `qt_reduce`, `write_trace_args`, `trace`, `write_draw_args`, `variance`,
+    /// `density_update`, `density_scale`.
+    pub compute: [CachedComputePipelineId; 8],
+    /// Plain splats.
+    pub splat: CachedRenderPipelineId,
+    /// Small splats, 4x MSAA, per-sample shading (when the adapter can multisample and
+    /// resolve `Rgba32Float`).
+    pub splat_msaa: Option<CachedRenderPipelineId>,
+}
+
+/// Entry points of [`AapsPipelines::compute`], in order.
+pub const COMPUTE_ENTRIES: [&str; 8] = [
+    "qt_leaves",
+    "qt_reduce",
+    "write_trace_args",
+    "trace",
+    "write_draw_args",
+    "variance",
+    "density_update",
+    "density_scale",
+];
+
+pub(super) fn init_aaps_pipelines(
+    mut commands: Commands,
+    shaders: Res<AapsShaders>,
+    cache: Res<PipelineCache>,
+    support: Res<super::AapsSupport>,
+) {
+    use binding_types::*;
+    let ro = || storage_buffer_read_only_sized(false, None);
+    let rw = || storage_buffer_sized(false, None);
+    let tex = || texture_2d(TextureSampleType::Float { filterable: false });
+    let compute_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:aaps",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                ro(),
+                ro(),
+                ro(),
+                ro(),
+                ro(),
+                ro(),
+                ro(),
+                rw(),
+                ro(),
+                uniform_buffer_sized(false, None),
+                rw(),
+                rw(),
+                rw(),
+                rw(),
+                tex(),
+                tex(),
+                uniform_buffer_sized(true, None),
+            ),
+        ),
+    );
+    let args_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:aaps_args",
+        &BindGroupLayoutEntries::sequential(ShaderStages::COMPUTE, (rw(),)),
+    );
+    let splat_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:aaps_splat",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::VERTEX_FRAGMENT,
+            (
+                uniform_buffer_sized(false, None),
+                ro(),
+                texture_depth_2d(),
+                uniform_buffer_sized(false, None),
+            ),
+        ),
+    );
+    let compute = COMPUTE_ENTRIES.map(|entry| {
+        let mut layout = vec![compute_layout.clone()];
+        if entry.starts_with("write_") {
+            layout.push(args_layout.clone());
+        }
+        cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some(format!("caustics:pipeline:aaps_{entry}").into()),
+            layout,
+            shader: shaders.compute.clone(),
+            entry_point: Some(entry.into()),
+            ..default()
+        })
+    });
+    let add = BlendComponent {
+        src_factor: BlendFactor::One,
+        dst_factor: BlendFactor::One,
+        operation: BlendOperation::Add,
+    };
+    let raster = |label: &'static str, vs: &'static str, fs: &'static str, samples: u32| {
+        cache.queue_render_pipeline(RenderPipelineDescriptor {
+            label: Some(label.into()),
+            layout: vec![splat_layout.clone()],
+            vertex: VertexState {
+                shader: shaders.splat.clone(),
+                entry_point: Some(vs.into()),
+                ..default()
+            },
+            fragment: Some(FragmentState {
+                shader: shaders.splat.clone(),
+                entry_point: Some(fs.into()),
+                targets: vec![Some(ColorTargetState {
+                    format: CAUSTICS_BUFFER_FORMAT,
+                    blend: Some(BlendState {
+                        color: add,
+                        alpha: add,
+                    }),
+                    write_mask: ColorWrites::ALL,
+                })],
+                ..default()
+            }),
+            multisample: MultisampleState {
+                count: samples,
+                ..default()
+            },
+            ..default()
+        })
+    };
+    let splat = raster("caustics:pipeline:aaps_splat", "vs_big", "fs_big", 1);
+    let splat_msaa = support.msaa.then(|| {
+        raster(
+            "caustics:pipeline:aaps_splat_msaa",
+            "vs_small",
+            "fs_small",
+            4,
+        )
+    });
+    commands.insert_resource(AapsPipelines {
+        compute_layout,
+        args_layout,
+        splat_layout,
+        compute,
+        splat,
+        splat_msaa,
+    });
+}

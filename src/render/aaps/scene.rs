@@ -1,0 +1,257 @@
+//! The GPU scene of AAPS: the flattened two-level BVH with its normals and material table
+//! (uploaded only when the gathered scene changes and a camera uses AAPS), and the light table.
+
+use bevy::prelude::*;
+use bevy::render::render_resource::{Buffer, BufferInitDescriptor, BufferUsages};
+use bevy::render::renderer::RenderDevice;
+use glam::Vec3;
+
+use crate::optics;
+use crate::scene::{CausticsScene, GpuBvh, Surface, Tlas, TraceLight};
+
+/// One light on the GPU (80 bytes; `AapsLight` in common.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AapsLight {
+    /// Point/spot position, or the corner of a directional light's origin grid.
+    pub position: Vec3,
+    /// 0 directional, 1 point, 2 spot.
+    pub kind: u32,
+    /// Directional: travel direction. Spot: axis.
+    pub axis: Vec3,
+    /// Spot: cosine of the outer angle.
+    pub cos_outer: f32,
+    /// Directional grid edge along the first parameter.
+    pub side_u: Vec3,
+    /// Spot: cosine of the inner angle.
+    pub cos_inner: f32,
+    /// Directional grid edge along the second parameter.
+    pub side_v: Vec3,
+    /// Power over the whole parameter square, per channel: lm (point/spot, over the sphere)
+    /// or lux · m² (directional, over the grid).
+    pub power: Vec3,
+}
+
+impl AapsLight {
+    /// The 80 bytes of the GPU layout.
+    pub fn bytes(&self) -> Vec<u8> {
+        let f = [
+            self.position.x,
+            self.position.y,
+            self.position.z,
+            f32::from_bits(self.kind),
+            self.axis.x,
+            self.axis.y,
+            self.axis.z,
+            self.cos_outer,
+            self.side_u.x,
+            self.side_u.y,
+            self.side_u.z,
+            self.cos_inner,
+            self.side_v.x,
+            self.side_v.y,
+            self.side_v.z,
+            0.0,
+            self.power.x,
+            self.power.y,
+            self.power.z,
+            0.0,
+        ];
+        f.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+}
+
+/// The bounding sphere of the casters (specular instances), if any.
+pub fn caster_sphere(tlas: &Tlas) -> Option<(Vec3, f32)> {
+    let (lo, hi) = tlas.bounds_where(|i| i.surface.is_specular())?;
+    Some(((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(1e-9)))
+}
+
+/// Whether `light` can reach a caster: a directional or point light always can (if there is
+/// one); a spot light only when its outer cone meets the casters' bounding sphere.
+pub fn reaches_casters(light: &TraceLight, tlas: &Tlas) -> bool {
+    let Some((c, r)) = caster_sphere(tlas) else {
+        return false;
+    };
+    match *light {
+        TraceLight::Directional { .. } | TraceLight::Point { .. } => true,
+        TraceLight::Spot {
+            position,
+            direction,
+            outer_angle,
+            ..
+        } => {
+            let to_c = c - position;
+            let dist = to_c.length();
+            if dist <= r {
+                return true;
+            }
+            let Some(axis) = direction.try_normalize() else {
+                return false;
+            };
+            let angle = axis.dot(to_c / dist).clamp(-1.0, 1.0).acos();
+            angle <= outer_angle.clamp(0.0, core::f32::consts::PI) + (r / dist).asin()
+        }
+    }
+}
+
+/// The GPU light table: one entry per light that reaches a caster, in order, with the
+/// entity of each. A directional light's origin grid is the square of side `2r` around the
+/// casters' bounding sphere (centre `c`, radius `r`), perpendicular to the light, placed
+/// before the whole scene (like the reference tracer's disc).
+pub fn aaps_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity, AapsLight)> {
+    let Some((c, r)) = caster_sphere(tlas) else {
+        return Vec::new();
+    };
+    let scene_radius = tlas.bounds_where(|_| true).map_or(r, |(lo, hi)| {
+        ((hi - lo) * 0.5).length() + (c - (lo + hi) * 0.5).length()
+    });
+    let mut out = Vec::new();
+    for (e, light) in lights {
+        if !reaches_casters(light, tlas) {
+            continue;
+        }
+        let l = match *light {
+            TraceLight::Directional {
+                direction,
+                illuminance,
+            } => {
+                let Some(d) = direction.try_normalize() else {
+                    continue;
+                };
+                let (t, b) = optics::orthonormal_basis(d);
+                let start = c - d * (scene_radius * 2.0 + r);
+                AapsLight {
+                    position: start - t * r - b * r,
+                    kind: 0,
+                    axis: d,
+                    cos_outer: -1.0,
+                    side_u: t * 2.0 * r,
+                    cos_inner: -1.0,
+                    side_v: b * 2.0 * r,
+                    power: illuminance * 4.0 * r * r,
+                }
+            }
+            TraceLight::Point { position, flux } => AapsLight {
+                position,
+                kind: 1,
+                axis: Vec3::Z,
+                cos_outer: -1.0,
+                side_u: Vec3::ZERO,
+                cos_inner: -1.0,
+                side_v: Vec3::ZERO,
+                power: flux,
+            },
+            TraceLight::Spot {
+                position,
+                direction,
+                flux,
+                inner_angle,
+                outer_angle,
+            } => AapsLight {
+                position,
+                kind: 2,
+                axis: direction.try_normalize().unwrap_or(Vec3::NEG_Z),
+                cos_outer: outer_angle.cos(),
+                side_u: Vec3::ZERO,
+                cos_inner: inner_angle.cos(),
+                side_v: Vec3::ZERO,
+                power: flux,
+            },
+        };
+        if l.power.is_finite() && l.position.is_finite() && l.side_u.is_finite() {
+            out.push((*e, l));
+        }
+    }
+    out
+}
+
+/// The scene in GPU buffers (render world), rebuilt when the gathered scene's generation
+/// changes and a camera uses AAPS.
+#[derive(Resource)]
+pub struct AapsSceneBuffers {
+    /// Generation of the scene uploaded.
+    pub generation: u64,
+    /// bvh nodes, triangles, instances, TLAS nodes, TLAS prims, normals, materials, lights.
+    pub buffers: [Buffer; 8],
+    /// Lights in the table.
+    pub lights: u32,
+    /// Extent of the scene, metres (ray offsets).
+    pub scene_scale: f32,
+}
+
+/// The render world's copy of the gathered scene.
+#[derive(Resource, Clone, Default)]
+pub struct ExtractedCausticsScene(pub CausticsScene);
+
+fn f4(v: &[[f32; 4]]) -> Vec<u8> {
+    let mut b: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    // Storage buffers may not be empty.
+    b.resize(b.len().max(16), 0);
+    b
+}
+
+impl AapsSceneBuffers {
+    /// Flatten and upload `scene`.
+    pub fn upload(device: &RenderDevice, scene: &CausticsScene) -> Self {
+        let bvh = GpuBvh::from_tlas(&scene.tlas);
+        let lights = aaps_lights(&scene.tlas, &scene.lights);
+        let mut light_bytes: Vec<u8> = lights.iter().flat_map(|(_, l)| l.bytes()).collect();
+        light_bytes.resize(light_bytes.len().max(80), 0);
+        let mut prims: Vec<u8> = bvh
+            .tlas_prims
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        prims.resize(prims.len().max(16), 0);
+        let mut instances = bvh.instance_bytes();
+        instances.resize(instances.len().max(64), 0);
+        let contents = [
+            f4(&bvh.nodes),
+            f4(&bvh.triangles),
+            instances,
+            f4(&bvh.tlas_nodes),
+            prims,
+            f4(&bvh.normals),
+            f4(&bvh.materials),
+            light_bytes,
+        ];
+        let names = [
+            "caustics:aaps:bvh_nodes",
+            "caustics:aaps:bvh_triangles",
+            "caustics:aaps:bvh_instances",
+            "caustics:aaps:tlas_nodes",
+            "caustics:aaps:tlas_prims",
+            "caustics:aaps:normals",
+            "caustics:aaps:materials",
+            "caustics:aaps:lights",
+        ];
+        let buffers = std::array::from_fn(|i| {
+            device.create_buffer_with_data(&BufferInitDescriptor {
+                label: Some(names[i]),
+                contents: &contents[i],
+                usage: BufferUsages::STORAGE,
+            })
+        });
+        let scene_scale = scene
+            .tlas
+            .bounds_where(|_| true)
+            .map_or(1.0, |(lo, hi)| (hi - lo).max_element());
+        Self {
+            generation: scene.generation,
+            buffers,
+            lights: lights.len() as u32,
+            scene_scale,
+        }
+    }
+}
+
+/// True when the scene has something for AAPS to do.
+pub fn has_work(scene: &CausticsScene) -> bool {
+    scene.is_active()
+        && scene
+            .tlas
+            .instances
+            .iter()
+            .any(|i| !matches!(i.surface, Surface::Diffuse { .. }))
+        && !aaps_lights(&scene.tlas, &scene.lights).is_empty()
+}

@@ -1,0 +1,359 @@
+// AAPS emit and trace (seed 004 sections 2.3.1, 3.1.2, 3.2.1, 3.3.1, 3.3.2, 3.3.5): one thread
+// per task id walks the density quadtree to its texel and grid sample, emits a photon with two
+// differential rays, traces it through the BVH (split at most once at a dielectric, then the
+// previous interaction repeats), and at the first diffuse hit appends an anisotropic splat.
+
+const INVALID: u32 = 0xffffffffu;
+const TRACE_PI: f32 = 3.14159265358979;
+
+struct Path {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    ou: vec3<f32>,
+    du: vec3<f32>,
+    ov: vec3<f32>,
+    dv: vec3<f32>,
+    flux: vec3<f32>,
+    seg_start: vec3<f32>,
+    medium: u32,
+    bounces: u32,
+    // 0: may still split; 1: split, refraction repeats; 2: split, reflection repeats.
+    split: u32,
+}
+
+fn finite3(v: vec3<f32>) -> bool {
+    return all(abs(v) <= vec3(3.0e38));
+}
+
+fn object_point(inst: BvhInstance, p: vec3<f32>) -> vec3<f32> {
+    let q = vec4(p, 1.0);
+    return vec3(dot(inst.row0, q), dot(inst.row1, q), dot(inst.row2, q));
+}
+
+// World normal of an object-space normal: the transpose of local_from_world's linear part.
+fn world_normal(inst: BvhInstance, n: vec3<f32>) -> vec3<f32> {
+    let w = inst.row0.xyz * n.x + inst.row1.xyz * n.y + inst.row2.xyz * n.z;
+    let l = length(w);
+    return select(vec3(0.0), w / l, l > 0.0 && l < 3.0e38);
+}
+
+// Interpolated shading normal of triangle `slot` at barycentrics (u, v), world space.
+fn shading_normal(inst: BvhInstance, slot: u32, uv: vec2<f32>) -> vec3<f32> {
+    let n = bvh_normals[3u * slot] * (1.0 - uv.x - uv.y) + bvh_normals[3u * slot + 1u] * uv.x
+        + bvh_normals[3u * slot + 2u] * uv.y;
+    return world_normal(inst, n.xyz);
+}
+
+// Barycentrics of a world point in the plane of triangle `slot` (extrapolated outside it):
+// the differential rays are updated "as if they hit the same triangle" (section 3.3.2).
+fn plane_barycentrics(inst: BvhInstance, slot: u32, p: vec3<f32>) -> vec2<f32> {
+    let q = object_point(inst, p) - bvh_triangles[3u * slot].xyz;
+    let e1 = bvh_triangles[3u * slot + 1u].xyz;
+    let e2 = bvh_triangles[3u * slot + 2u].xyz;
+    let d00 = dot(e1, e1);
+    let d01 = dot(e1, e2);
+    let d11 = dot(e2, e2);
+    let d20 = dot(q, e1);
+    let d21 = dot(q, e2);
+    let den = d00 * d11 - d01 * d01;
+    if !(abs(den) > 0.0) || abs(den) > 3.0e38 {
+        return vec2(1.0 / 3.0);
+    }
+    let uv = vec2(d11 * d20 - d01 * d21, d00 * d21 - d01 * d20) / den;
+    return select(vec2(1.0 / 3.0), uv, finite3(vec3(uv, 0.0)));
+}
+
+// A differential ray's shading normal, on the same side as the main ray's `ns_f`. Guard: far
+// outside the triangle the extrapolated normal can turn over; the main normal is used then.
+fn differential_normal(inst: BvhInstance, slot: u32, p: vec3<f32>, ns_f: vec3<f32>) -> vec3<f32> {
+    var n = shading_normal(inst, slot, plane_barycentrics(inst, slot, p));
+    n = select(n, -n, dot(n, ns_f) < 0.0);
+    return select(ns_f, n, dot(n, ns_f) > 0.5);
+}
+
+// reflect_guarded (src/reference/tracer.rs): about the shading normal unless that sends the
+// ray into the surface, then about the geometric normal.
+fn reflect_guarded(d: vec3<f32>, ns_f: vec3<f32>, ng_f: vec3<f32>) -> vec3<f32> {
+    let r = optics_reflect(d, ns_f);
+    return select(optics_reflect(d, ng_f), r, dot(r, ng_f) > 0.0);
+}
+
+// Refraction with the tracer's geometric-normal fallback; w = 0 when both fail (TIR).
+fn refract_guarded(d: vec3<f32>, ns_f: vec3<f32>, ng_f: vec3<f32>, eta: f32) -> vec4<f32> {
+    let t = optics_refract(d, ns_f, eta);
+    if t.w > 0.0 && dot(t.xyz, ng_f) < 0.0 {
+        return t;
+    }
+    return optics_refract(d, ng_f, eta);
+}
+
+// Append the splat of a photon that reached a diffuse surface (sections 3.1.2, 3.3.5).
+fn deposit(path: ptr<function, Path>, pos: vec3<f32>, pu: vec3<f32>, pv: vec3<f32>, ng_f: vec3<f32>, texel: u32, texel_energy: f32) {
+    let scale = params.camera.w;
+    let s = optics_splat_from_differentials((pu - pos) * params.viewport.w, (pv - pos) * params.viewport.w, ng_f, params.limits.w, params.splat.y, params.splat.z);
+    if s.clamped {
+        atomicAdd(&accum[C_CLAMPED], 1u);
+    }
+    let area = TRACE_PI * length(s.a) * length(s.b);
+    let flux = (*path).flux;
+    if !(area > 0.0) || !finite3(flux) {
+        atomicAdd(&accum[C_NAN], 1u);
+        return;
+    }
+    // The camera must see the lit side.
+    if dot(params.camera.xyz - pos, ng_f) <= 0.0 {
+        atomicAdd(&accum[C_CULL_FRUSTUM], 1u);
+        return;
+    }
+    // Solid angle seen from the last specular interaction (section 3.3.5).
+    // Splats above the threshold do not steer the density (they would ask for unbounded
+    // photons at grazing angles); with `drop_large_splats` they are culled as well.
+    let seg = distance(pos, (*path).seg_start);
+    let large = params.limits.z > 0.0 && area > params.limits.z * seg * seg;
+    if large && params.splat.w != 0.0 {
+        atomicAdd(&accum[C_CULL_SIZE], 1u);
+        return;
+    }
+    // Frustum: culled when all four corners are outside one clip plane.
+    var all_out = vec4<bool>(true);
+    var behind = true;
+    for (var k = 0u; k < 4u; k += 1u) {
+        let sa = select(-1.0, 1.0, (k & 1u) == 0u);
+        let sb = select(-1.0, 1.0, (k & 2u) == 0u);
+        let c = params.clip_from_world * vec4(pos + sa * s.a + sb * s.b, 1.0);
+        behind = behind && c.w <= 0.0;
+        all_out = all_out & vec4((c.x < -c.w), (c.x > c.w), (c.y < -c.w), (c.y > c.w));
+    }
+    if behind || any(all_out) {
+        atomicAdd(&accum[C_CULL_FRUSTUM], 1u);
+        return;
+    }
+    let size = params.viewport.xy;
+    let p0 = aaps_to_pixel(params.clip_from_world, pos, size);
+    let pa = aaps_to_pixel(params.clip_from_world, pos + s.a, size);
+    let pb = aaps_to_pixel(params.clip_from_world, pos + s.b, size);
+    var area_px = 1.0e9;
+    if p0.z > 0.0 && pa.z > 0.0 && pb.z > 0.0 {
+        let x = pa.xy - p0.xy;
+        let y = pb.xy - p0.xy;
+        area_px = TRACE_PI * abs(x.x * y.y - x.y * y.x);
+    }
+    let e = flux / area;
+    if !finite3(e) {
+        atomicAdd(&accum[C_NAN], 1u);
+        return;
+    }
+    let cap = params.caps.x;
+    let slot = atomicAdd(&accum[C_RESERVED], 1u);
+    if slot >= cap {
+        atomicAdd(&accum[C_OVERFLOW], 1u);
+        return;
+    }
+    let small = params.caps.w != 0u && area_px < params.splat.x;
+    var idx = 0u;
+    if small {
+        idx = cap - 1u - atomicAdd(&accum[C_SMALL], 1u);
+    } else {
+        idx = atomicAdd(&accum[C_BIG], 1u);
+    }
+    let frac = select(0.0, luminance(flux) / texel_energy, texel_energy > 0.0);
+    splats[idx] = AapsSplat(
+        vec4(pos, bitcast<f32>(texel)),
+        vec4(s.a, bitcast<f32>(select(0u, 1u, small))),
+        vec4(s.b, frac),
+        vec4(e, area_px),
+    );
+    if !large {
+        let base = ACCUM_TEXELS + 4u * texel;
+        accum_add_f32(base, min(area_px, 1.0e6));
+        atomicAdd(&accum[base + 1u], 1u);
+    }
+}
+
+// Follow one path to its diffuse hit; a split stores the reflected branch in `pending`.
+fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending: ptr<function, bool>, texel: u32, texel_energy: f32) {
+    let scale = params.camera.w;
+    let max_bounces = params.caps.z;
+    for (var guard = 0u; guard < 64u; guard += 1u) {
+        let hit = bvh_closest_hit((*path).o, (*path).d, 0.0, BVH_FAR);
+        if hit.instance == BVH_INVALID {
+            if (*path).bounces == 0u {
+                atomicAdd(&accum[C_DROPPED], 1u);
+            }
+            return;
+        }
+        let m0 = materials[3u * hit.instance];
+        let kind = bitcast<u32>(m0.x);
+        if (*path).bounces == 0u && kind == MAT_DIFFUSE {
+            // Section 3.1.2: a photon whose first hit is not a caster is discarded.
+            atomicAdd(&accum[C_DROPPED], 1u);
+            return;
+        }
+        if (*path).medium != INVALID {
+            let mm = materials[3u * (*path).medium];
+            (*path).flux *= optics_beer_lambert(materials[3u * (*path).medium + 1u].xyz, mm.w, hit.t);
+        }
+        let pos = (*path).o + (*path).d * hit.t;
+        let inst = bvh_instances[hit.instance];
+        let ng = world_normal(inst, cross(bvh_triangles[3u * hit.slot + 1u].xyz, bvh_triangles[3u * hit.slot + 2u].xyz));
+        var ns = shading_normal(inst, hit.slot, hit.uv);
+        if !finite3(pos) || all(ng == vec3(0.0)) {
+            atomicAdd(&accum[C_NAN], 1u);
+            return;
+        }
+        if all(ns == vec3(0.0)) {
+            ns = ng;
+        }
+        let d = (*path).d;
+        let entering = dot(d, ng) < 0.0;
+        let ng_f = select(-ng, ng, entering);
+        let flip = dot(d, ns) > 0.0;
+        let ns_f = select(ns, -ns, flip);
+        let tu = optics_transfer_to_plane((*path).ou, (*path).du, pos, ng);
+        let tv = optics_transfer_to_plane((*path).ov, (*path).dv, pos, ng);
+        if tu.w == 0.0 || tv.w == 0.0 {
+            atomicAdd(&accum[C_CLAMPED], 1u);
+        }
+        if kind == MAT_DIFFUSE {
+            deposit(path, pos, tu.xyz, tv.xyz, ng_f, texel, texel_energy);
+            return;
+        }
+        if (*path).bounces >= max_bounces {
+            atomicAdd(&accum[C_MAX_DEPTH], 1u);
+            return;
+        }
+        let nu = differential_normal(inst, hit.slot, tu.xyz, ns_f);
+        let nv = differential_normal(inst, hit.slot, tv.xyz, ns_f);
+        (*path).bounces += 1u;
+        (*path).seg_start = pos;
+        (*path).ou = tu.xyz;
+        (*path).ov = tv.xyz;
+        if kind == MAT_CONDUCTOR {
+            (*path).flux *= optics_fresnel_schlick(-dot(d, ns_f), materials[3u * hit.instance + 2u].xyz);
+            (*path).d = reflect_guarded(d, ns_f, ng_f);
+            (*path).du = reflect_guarded((*path).du, nu, ng_f);
+            (*path).dv = reflect_guarded((*path).dv, nv, ng_f);
+            (*path).o = optics_offset_ray_origin(pos, ng_f, scale);
+            continue;
+        }
+        // Dielectric.
+        let ior = max(m0.y, 1.0);
+        let thin = m0.z > 0.5;
+        let eta = select(ior, 1.0 / ior, entering);
+        let r = optics_fresnel_dielectric(-dot(d, ns_f), eta);
+        var t = vec4(d, 1.0);
+        if !thin {
+            t = refract_guarded(d, ns_f, ng_f, eta);
+        }
+        var refract = true;
+        if r >= 1.0 || t.w == 0.0 {
+            // Total internal reflection: reflect, whatever the split state says.
+            atomicAdd(&accum[C_TIR], 1u);
+            refract = false;
+        } else if (*path).split == 0u {
+            if r > 0.0 {
+                // Section 3.3.1: split once; the reflected half waits in `pending`.
+                atomicAdd(&accum[C_SPLIT], 1u);
+                *pending = *path;
+                (*pending).flux *= r;
+                (*pending).split = 2u;
+                (*pending).d = reflect_guarded(d, ns_f, ng_f);
+                (*pending).du = reflect_guarded((*path).du, nu, ng_f);
+                (*pending).dv = reflect_guarded((*path).dv, nv, ng_f);
+                (*pending).o = optics_offset_ray_origin(pos, ng_f, scale);
+                *has_pending = true;
+                (*path).split = 1u;
+                (*path).flux *= 1.0 - r;
+            }
+        } else if (*path).split == 1u {
+            (*path).flux *= 1.0 - r;
+        } else {
+            (*path).flux *= r;
+            refract = false;
+        }
+        if refract {
+            (*path).d = t.xyz;
+            if !thin {
+                let tdu = refract_guarded((*path).du, nu, ng_f, eta);
+                let tdv = refract_guarded((*path).dv, nv, ng_f, eta);
+                (*path).du = select(t.xyz, tdu.xyz, tdu.w > 0.0);
+                (*path).dv = select(t.xyz, tdv.xyz, tdv.w > 0.0);
+                (*path).medium = select(INVALID, hit.instance, entering);
+            }
+            (*path).o = optics_offset_ray_origin(pos, -ng_f, scale);
+        } else {
+            (*path).d = reflect_guarded(d, ns_f, ng_f);
+            (*path).du = reflect_guarded((*path).du, nu, ng_f);
+            (*path).dv = reflect_guarded((*path).dv, nv, ng_f);
+            (*path).o = optics_offset_ray_origin(pos, ng_f, scale);
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let task = (wid.y * nwg.x + wid.x) * 64u + lid;
+    let limit = min(atomicLoad(&accum[C_TASKS]), params.caps.y);
+    if task >= limit {
+        return;
+    }
+    let w = quadtree_walk(params.atlas.x, task);
+    if w.w == 0u {
+        return;
+    }
+    let light_index = atlas_tile(w.xy);
+    if light_index >= params.atlas.w {
+        return;
+    }
+    atomicAdd(&accum[C_EMITTED], 1u);
+    let tile = params.atlas.y;
+    let local = w.xy % vec2(tile);
+    let k = max(u32(round(sqrt(f32(w.w)))), 1u);
+    let cell = vec2(f32(w.z % k), f32(min(w.z / k, k - 1u))) + 0.5;
+    let uv = (vec2<f32>(local) + cell / f32(k)) / f32(tile);
+    // Differentials: one grid step along each parameter (inwards at the square's far edges).
+    let delta = 1.0 / (f32(tile) * f32(k));
+    let uv_u = vec2(select(uv.x + delta, uv.x - delta, uv.x + delta > 1.0), uv.y);
+    let uv_v = vec2(uv.x, select(uv.y + delta, uv.y - delta, uv.y + delta > 1.0));
+    let light = lights[light_index];
+    let kind = bitcast<u32>(light.position.w);
+    // Section 3.2.1: power / partitions / photons in the partition.
+    let texel_power = light.power.xyz / f32(tile * tile);
+    var path: Path;
+    path.flux = texel_power / f32(w.w);
+    path.medium = INVALID;
+    path.bounces = 0u;
+    path.split = 0u;
+    if kind == LIGHT_DIRECTIONAL {
+        let p0 = light.position.xyz;
+        path.o = p0 + uv.x * light.side_u.xyz + uv.y * light.side_v.xyz;
+        path.ou = p0 + uv_u.x * light.side_u.xyz + uv_u.y * light.side_v.xyz;
+        path.ov = p0 + uv_v.x * light.side_u.xyz + uv_v.y * light.side_v.xyz;
+        path.d = light.axis.xyz;
+        path.du = path.d;
+        path.dv = path.d;
+    } else {
+        path.o = light.position.xyz;
+        path.ou = path.o;
+        path.ov = path.o;
+        path.d = optics_equal_area_square_to_sphere(uv);
+        path.du = optics_equal_area_square_to_sphere(uv_u);
+        path.dv = optics_equal_area_square_to_sphere(uv_v);
+        if kind == LIGHT_SPOT {
+            path.flux *= optics_spot_attenuation(dot(path.d, light.axis.xyz), light.side_u.w, light.axis.w);
+        }
+    }
+    path.seg_start = path.o;
+    if all(path.flux <= vec3(0.0)) {
+        return;
+    }
+    let texel = w.y * params.atlas.x + w.x;
+    let texel_energy = luminance(texel_power);
+    var pending: Path;
+    var has_pending = false;
+    run_path(&path, &pending, &has_pending, texel, texel_energy);
+    if has_pending {
+        var none = false;
+        run_path(&pending, &path, &none, texel, texel_energy);
+    }
+}

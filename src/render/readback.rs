@@ -1,0 +1,157 @@
+//! Tool-side readback of a view's caustics buffer and AAPS counters (headless renders, tests,
+//! the report). Only on request: no frame ever waits for it. The copy is recorded after the
+//! composite and mapped when the GPU finishes; the main world picks it up frames later.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::prelude::*;
+use bevy::render::RenderApp;
+use bevy::render::render_resource::{
+    Buffer, BufferDescriptor, BufferUsages, Extent3d, MapMode, TexelCopyBufferInfo,
+    TexelCopyBufferLayout, TexelCopyTextureInfo,
+};
+use bevy::render::renderer::{RenderContext, ViewQuery};
+
+use super::aaps::view::AapsViewState;
+use super::{ExtractedCaustics, ViewCausticsBuffer};
+use crate::reference::CausticImage;
+
+/// Number of AAPS counter words read back (`C_*` in src/render/aaps/common.wgsl).
+pub const COUNTER_WORDS: usize = 32;
+
+#[derive(Default)]
+struct State {
+    requested: bool,
+    pending: Option<(Buffer, UVec2, u32, Arc<AtomicBool>)>,
+}
+
+/// A readback result.
+#[derive(Clone, Debug)]
+pub struct CausticsSnapshot {
+    /// The caustics buffer, lux.
+    pub image: CausticImage,
+    /// The AAPS counters of the same frame (zeros for other techniques).
+    pub counters: [u32; COUNTER_WORDS],
+}
+
+/// Shared between the main and render worlds.
+#[derive(Resource, Clone, Default)]
+pub struct CausticsReadback(Arc<Mutex<State>>);
+
+impl CausticsReadback {
+    /// Ask for the next frame's caustics buffer of the (first) caustics view.
+    pub fn request(&self) {
+        if let Ok(mut s) = self.0.lock() {
+            s.requested = true;
+        }
+    }
+
+    /// The snapshot, once the GPU has delivered it.
+    pub fn poll(&self) -> Option<CausticsSnapshot> {
+        let mut s = self.0.lock().ok()?;
+        let (buffer, size, row, ready) = s.pending.as_ref()?;
+        if !ready.load(Ordering::Acquire) {
+            return None;
+        }
+        let (w, h, row) = (size.x as usize, size.y as usize, *row as usize);
+        let data = buffer.slice(..).get_mapped_range().to_vec();
+        buffer.unmap();
+        s.pending = None;
+        let f = |i: usize| f32::from_le_bytes(data[i..i + 4].try_into().unwrap());
+        let mut image = CausticImage::new(w as u32, h as u32);
+        for y in 0..h {
+            for x in 0..w {
+                let at = y * row + x * 16;
+                image.data[y * w + x] = Vec3::new(f(at), f(at + 4), f(at + 8));
+            }
+        }
+        let mut counters = [0u32; COUNTER_WORDS];
+        for (i, c) in counters.iter_mut().enumerate() {
+            let at = row * h + 4 * i;
+            *c = u32::from_le_bytes(data[at..at + 4].try_into().unwrap());
+        }
+        Some(CausticsSnapshot { image, counters })
+    }
+}
+
+fn copy_for_readback(
+    view: ViewQuery<(
+        &ViewCausticsBuffer,
+        &ExtractedCaustics,
+        Option<&AapsViewState>,
+    )>,
+    readback: Res<CausticsReadback>,
+    mut ctx: RenderContext,
+) {
+    let (buffer, _, aaps) = view.into_inner();
+    let Ok(mut s) = readback.0.lock() else {
+        return;
+    };
+    if !s.requested || s.pending.is_some() {
+        return;
+    }
+    s.requested = false;
+    let row = (buffer.size.x * 16).div_ceil(256) * 256;
+    let image_bytes = row as u64 * buffer.size.y as u64;
+    let staging = ctx.render_device().create_buffer(&BufferDescriptor {
+        label: Some("caustics:readback"),
+        size: image_bytes + (COUNTER_WORDS * 4) as u64,
+        usage: BufferUsages::MAP_READ | BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let encoder = ctx.command_encoder();
+    encoder.copy_texture_to_buffer(
+        TexelCopyTextureInfo {
+            texture: &buffer.texture,
+            mip_level: 0,
+            origin: Default::default(),
+            aspect: Default::default(),
+        },
+        TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(buffer.size.y),
+            },
+        },
+        Extent3d {
+            width: buffer.size.x,
+            height: buffer.size.y,
+            depth_or_array_layers: 1,
+        },
+    );
+    if let Some(state) = aaps {
+        encoder.copy_buffer_to_buffer(
+            &state.accum,
+            0,
+            &staging,
+            image_bytes,
+            Some((COUNTER_WORDS * 4) as u64),
+        );
+    }
+    let ready = Arc::new(AtomicBool::new(false));
+    let flag = ready.clone();
+    encoder.map_buffer_on_submit(&staging, MapMode::Read, .., move |r| {
+        if r.is_ok() {
+            flag.store(true, Ordering::Release);
+        }
+    });
+    s.pending = Some((staging, buffer.size, row, ready));
+}
+
+pub(super) fn build(app: &mut App) {
+    let readback = CausticsReadback::default();
+    app.insert_resource(readback.clone());
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app.insert_resource(readback).add_systems(
+        Core3d,
+        copy_for_readback
+            .in_set(Core3dSystems::MainPass)
+            .after(super::composite::composite_caustics),
+    );
+}
