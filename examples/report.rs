@@ -1,7 +1,7 @@
 //! Error against run time, for every scene and technique: `REPORT.md` plus one SVG per scene.
 //!
 //! ```text
-//! cargo run --release --example report -- [--scenes a,b,..] [--techniques reference] \
+//! cargo run --release --example report -- [--scenes a,b,..] [--techniques reference,aaps] \
 //!     [--out DIR] [--size N]
 //! ```
 //!
@@ -28,10 +28,19 @@ struct Point {
     technique: String,
     quality: String,
     photons: u64,
+    splats: Option<u64>,
     cpu_ms: f64,
     gpu_ms: f64,
+    passes: String,
     metrics: ImageMetrics,
 }
+
+/// The AAPS quality levels of the report: (name, photon budget per light, target area px).
+const AAPS_LEVELS: [(&str, u64, f32); 3] = [
+    ("low: 2^16/light, A_t 19", 1 << 16, 19.0),
+    ("medium: 2^18/light, A_t 4", 1 << 18, 4.0),
+    ("high: 2^20/light, A_t 1", 1 << 20, 1.0),
+];
 
 fn main() {
     bevy_caustics::headless::quiet_headless_environment();
@@ -54,7 +63,7 @@ fn real_main() -> Result<(), String> {
     ]
     .map(String::from)
     .to_vec();
-    let mut techniques = vec![CausticsTechnique::Reference];
+    let mut techniques = vec![CausticsTechnique::Reference, CausticsTechnique::Aaps];
     let mut out = root.join("report");
     let mut size = 128u32;
     let mut i = 0;
@@ -69,7 +78,7 @@ fn real_main() -> Result<(), String> {
                     .split(',')
                     .map(|t| {
                         CausticsTechnique::from_name(t).ok_or_else(|| {
-                            format!("unknown technique '{t}' (available: reference)")
+                            format!("unknown technique '{t}' (available: reference, aaps)")
                         })
                     })
                     .collect::<Result<_, _>>()?
@@ -87,7 +96,7 @@ fn real_main() -> Result<(), String> {
     let adapter = find_adapter()?;
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let sweep: Vec<u64> = vec![1 << 14, 1 << 16, 1 << 18, 1 << 20];
-    let total = scenes.len() * (1 + techniques.len() * sweep.len());
+    let total = scenes.len() * (1 + techniques.len() * sweep.len().max(AAPS_LEVELS.len()));
     let mut step = 0;
     let mut points = Vec::new();
     for scene in &scenes {
@@ -96,12 +105,28 @@ fn real_main() -> Result<(), String> {
         progress(step, total, &format!("{scene}: converged reference"));
         let reference = converged(&root, &path, scene, size)?;
         for technique in &techniques {
-            for &photons in &sweep {
+            let runs: Vec<(String, u64, bevy_caustics::AapsSettings)> = match technique {
+                CausticsTechnique::Aaps => AAPS_LEVELS
+                    .iter()
+                    .map(|(name, budget, target)| {
+                        let settings = bevy_caustics::AapsSettings {
+                            target_area: *target,
+                            ..Default::default()
+                        };
+                        (name.to_string(), *budget, settings)
+                    })
+                    .collect(),
+                _ => sweep
+                    .iter()
+                    .map(|p| (format!("{p} photons/light"), *p, Default::default()))
+                    .collect(),
+            };
+            for (quality, photons, settings) in runs {
                 step += 1;
                 progress(
                     step,
                     total,
-                    &format!("{scene}: {} {photons} photons", technique.name()),
+                    &format!("{scene}: {} {quality}", technique.name()),
                 );
                 let report = run(RenderJob {
                     scene: path.clone(),
@@ -111,19 +136,28 @@ fn real_main() -> Result<(), String> {
                     photons: Some(photons),
                     seed: SWEEP_SEED,
                     frames: 12,
+                    aaps: settings,
                     ..Default::default()
                 })?;
                 let image = report
                     .caustics
                     .clone()
                     .unwrap_or_else(|| CausticImage::new(size, size));
+                let passes = report
+                    .pass_ms
+                    .iter()
+                    .map(|(k, v)| format!("{} {v:.2}", k.rsplit('/').next().unwrap_or(k)))
+                    .collect::<Vec<_>>()
+                    .join(", ");
                 points.push(Point {
                     scene: scene.clone(),
                     technique: technique.name().into(),
-                    quality: format!("{photons} photons/light"),
+                    quality,
                     photons: report.photons_traced,
+                    splats: report.aaps.as_ref().map(|a| a.splats),
                     cpu_ms: report.reference_seconds * 1e3,
                     gpu_ms: report.pass_ms.values().fold(0.0, |a, b| a + b),
+                    passes,
                     metrics: compare(&image, &reference, None).ok_or("size mismatch")?,
                 });
             }
@@ -142,7 +176,7 @@ fn real_main() -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores); `gpu ms` is the median GPU time of the caustics passes (the composite) over 8 measured frames.\n"
+        "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores). `gpu ms` is the sum of the median GPU times of the caustics passes over the measured frames (12 frames; AAPS's task buffer adapts during them, from a uniform start); the last column lists each pass. AAPS quality levels: photon budget per light (a ceiling) and target splat area; `splats` counts the splats drawn in the last frame.\n"
     );
     let _ = writeln!(
         md,
@@ -159,26 +193,28 @@ fn real_main() -> Result<(), String> {
         let _ = writeln!(md, "## {scene}\n\n![{scene}]({scene}.svg)\n");
         let _ = writeln!(
             md,
-            "| technique | quality | photons | cpu ms | gpu ms | RMSE (lx) | rel. RMSE | FLIP | energy error |"
+            "| technique | quality | photons | splats | cpu ms | gpu ms | RMSE (lx) | rel. RMSE | FLIP | energy error | GPU ms per pass |"
         );
         let _ = writeln!(
             md,
-            "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+            "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
         );
         for p in points.iter().filter(|p| &p.scene == scene) {
             let m = &p.metrics;
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {:.1} | {:.3} | {:.2} | {:.4} | {:.4} | {:+.4} |",
+                "| {} | {} | {} | {} | {:.1} | {:.3} | {:.2} | {:.4} | {:.4} | {:+.4} | {} |",
                 p.technique,
                 p.quality,
                 p.photons,
+                p.splats.map_or("-".to_string(), |s| s.to_string()),
                 p.cpu_ms,
                 p.gpu_ms,
                 m.rmse,
                 m.relative_rmse,
                 m.flip,
-                m.energy_error
+                m.energy_error,
+                p.passes
             );
         }
         let _ = writeln!(md);

@@ -17,7 +17,8 @@ use bevy::prelude::*;
 #[reflect(Component, Default, Clone)]
 #[require(Hdr, DepthPrepass, DeferredPrepass)]
 pub struct Caustics {
-    /// Which algorithm fills the caustics buffer. Default [`CausticsTechnique::Reference`].
+    /// Which algorithm fills the caustics buffer. Default [`CausticsTechnique::Aaps`] (real
+    /// time, on the GPU); `Reference` is the CPU ground truth.
     pub technique: CausticsTechnique,
     /// Quality preset: photons per light for the reference tracer, the photon budget per light
     /// per frame for AAPS. Default `Medium`.
@@ -31,7 +32,7 @@ pub struct Caustics {
 impl Default for Caustics {
     fn default() -> Self {
         Self {
-            technique: CausticsTechnique::Reference,
+            technique: CausticsTechnique::Aaps,
             quality: CausticsQuality::Medium,
             debug_view: CausticsDebugView::Off,
             seed: 1,
@@ -44,12 +45,12 @@ impl Default for Caustics {
 pub enum CausticsTechnique {
     /// The CPU ground-truth light tracer (multi-threaded, deterministic). Renders once per
     /// scene change on a background task and uploads the image; seconds, not milliseconds.
-    #[default]
     Reference,
     /// Adaptive anisotropic photon scattering on the GPU (seed 004): compute-shader photon
     /// tracing through the scene BVH with photon differentials, anisotropic splats
     /// rasterised into the caustics buffer, and a task buffer that adapts the photon density
-    /// every frame. Milliseconds per frame. Settings: [`crate::AapsSettings`].
+    /// every frame. Milliseconds per frame. Settings: [`crate::AapsSettings`]. The default.
+    #[default]
     Aaps,
 }
 

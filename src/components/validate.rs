@@ -4,7 +4,7 @@
 
 use bevy::prelude::*;
 
-use super::{CausticLight, CausticMaterial, CausticsVolume};
+use super::{AapsSettings, CausticLight, CausticMaterial, CausticsVolume};
 
 /// Every invalid-input warning the plugin has logged, in order (the same text as the log
 /// line). Lets tools and tests see exactly what was clamped.
@@ -144,6 +144,39 @@ pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
     fixes
 }
 
+/// Clamp AAPS settings into range (see [`AapsSettings::sanitized`]); returns what was fixed,
+/// one entry per field that changed.
+pub fn sanitize_aaps(a: &mut AapsSettings) -> Vec<Fix> {
+    let fixed = a.sanitized();
+    let mut fixes = Vec::new();
+    macro_rules! check {
+        ($($f:ident),*) => {$(
+            if fixed.$f != a.$f {
+                fixes.push((
+                    stringify!($f),
+                    format!("{:?} is out of range; clamped to {:?}", a.$f, fixed.$f),
+                ));
+            }
+        )*};
+    }
+    check!(
+        atlas_resolution,
+        target_area,
+        variance_gain,
+        temporal_weight,
+        min_density,
+        max_density,
+        cull_solid_angle,
+        msaa_threshold,
+        splat_scale,
+        max_anisotropy,
+        max_bounces,
+        splat_capacity
+    );
+    *a = fixed;
+    fixes
+}
+
 /// The query a validation system runs over.
 type Checked<'w, 's, C> =
     Query<'w, 's, (Entity, &'static mut C, Option<&'static Name>), Changed<C>>;
@@ -175,6 +208,7 @@ pub(crate) fn plugin(app: &mut App) {
             validate::<CausticsVolume>("CausticsVolume", sanitize_volume),
             validate::<CausticLight>("CausticLight", sanitize_light),
             validate::<CausticMaterial>("CausticMaterial", sanitize_material),
+            validate::<AapsSettings>("AapsSettings", sanitize_aaps),
         )
             .in_set(crate::CausticsSystems::Validate),
     );
