@@ -808,3 +808,75 @@ fn capability_gate_lists_what_is_missing() {
 
 #[path = "cpu/aaps.rs"]
 mod aaps;
+
+/// Seed 000 section 3.3, case by case: the medium-interface rule of caustics volumes.
+#[test]
+fn volume_media_interface_rules() {
+    use MediaInterface::*;
+    let down = Vec3::NEG_Y;
+    let up_normal = Vec3::Y;
+    // "if P_med is false, and the surface normal at the interface lies in the opposite
+    // hemisphere as the photon direction ... entering the denser medium".
+    assert_eq!(media_interface(false, down, up_normal, true), Enter);
+    // "if P_med is true ... if the surface normal lies in the same hemisphere as the photon
+    // direction, then we assume the photon is exiting the denser medium".
+    assert_eq!(media_interface(true, down, -up_normal, true), Exit);
+    // "if the surface normal tests fail, the interface is ignored and the photon is assumed
+    // to remain in the original medium": in air meeting a back face, inside meeting a front face.
+    assert_eq!(media_interface(false, down, -up_normal, true), Ignore);
+    assert_eq!(media_interface(true, down, up_normal, true), Ignore);
+    // "The photon might be passing behind the object": outside the G_near..G_far depths.
+    assert_eq!(media_interface(false, down, up_normal, false), Ignore);
+    assert_eq!(media_interface(true, down, -up_normal, false), Ignore);
+    // Extremes: a photon exactly in the surface plane, a zero normal, NaN.
+    assert_eq!(media_interface(false, Vec3::X, up_normal, true), Ignore);
+    assert_eq!(media_interface(true, Vec3::X, up_normal, true), Ignore);
+    assert_eq!(media_interface(false, down, Vec3::ZERO, true), Ignore);
+    assert_eq!(media_interface(false, Vec3::NAN, up_normal, true), Ignore);
+    // Grazing but not parallel still decides by the sign.
+    let graze = Vec3::new(1.0, -1e-6, 0.0).normalize();
+    assert_eq!(media_interface(false, graze, up_normal, true), Enter);
+}
+
+/// `AapsSettings` out of range: every bad field is clamped and reported once by name.
+#[test]
+fn aaps_settings_are_sanitized() {
+    use bevy_caustics::AapsSettings;
+    use bevy_caustics::components::validate::sanitize_aaps;
+    let mut ok = AapsSettings::default();
+    assert!(sanitize_aaps(&mut ok).is_empty());
+    let mut bad = AapsSettings {
+        atlas_resolution: 100,
+        target_area: f32::NAN,
+        temporal_weight: 3.0,
+        min_density: 0.0,
+        splat_scale: -1.0,
+        max_anisotropy: 0.5,
+        max_bounces: 0,
+        splat_capacity: 0,
+        ..Default::default()
+    };
+    let fixes = sanitize_aaps(&mut bad);
+    let fields: Vec<&str> = fixes.iter().map(|f| f.0).collect();
+    assert_eq!(
+        fields,
+        [
+            "atlas_resolution",
+            "target_area",
+            "temporal_weight",
+            "min_density",
+            "splat_scale",
+            "max_anisotropy",
+            "max_bounces",
+            "splat_capacity"
+        ]
+    );
+    assert_eq!(bad.atlas_resolution, 128);
+    assert_eq!(bad.target_area, 19.0);
+    assert_eq!(bad.temporal_weight, 1.0);
+    assert_eq!(bad.min_density, 1.0);
+    assert!(
+        sanitize_aaps(&mut bad).is_empty(),
+        "a clamped value is valid"
+    );
+}

@@ -13,12 +13,14 @@
 mod aaps;
 mod footprint;
 mod fresnel;
+mod media;
 mod offset;
 mod sampling;
 
 pub use aaps::*;
 pub use footprint::*;
 pub use fresnel::*;
+pub use media::*;
 pub use offset::*;
 pub use sampling::*;
 
