@@ -880,3 +880,58 @@ fn aaps_settings_are_sanitized() {
         "a clamped value is valid"
     );
 }
+
+/// `CausticsVolume::fit`: the casters' box is inside the volume, the entry face looks at the
+/// light, and degenerate inputs still give a valid volume.
+#[test]
+fn volume_fit_holds_the_casters_and_faces_the_light() {
+    use bevy_caustics::{CausticsVolume, VolumeFace};
+    let cases = [
+        (
+            (Vec3::new(-1.0, 0.0, -0.5), Vec3::new(1.0, 0.3, 0.5)),
+            Vec3::NEG_Y,
+        ),
+        (
+            (Vec3::new(-1.0, 0.0, -0.5), Vec3::new(1.0, 0.3, 0.5)),
+            Vec3::new(1.0, -1.0, 0.2),
+        ),
+        ((Vec3::splat(1e4), Vec3::splat(1e4 + 1e-3)), Vec3::Y),
+        ((Vec3::ZERO, Vec3::ZERO), Vec3::ZERO),
+        (
+            (Vec3::splat(f32::NAN), Vec3::ONE),
+            Vec3::new(0.0, f32::NAN, 0.0),
+        ),
+    ];
+    for ((lo, hi), dir) in cases {
+        let (v, t) = CausticsVolume::fit((lo, hi), dir, 0.1);
+        assert!(v.size.is_finite() && v.size.min_element() >= 1e-3, "{v:?}");
+        assert!(t.translation.is_finite() && t.rotation.is_finite());
+        assert_eq!(
+            (v.entry, v.exit.as_slice()),
+            (VolumeFace::PosY, &[VolumeFace::NegY][..])
+        );
+        let travel = dir.try_normalize().unwrap_or(Vec3::NEG_Y);
+        let entry_world = t.rotation * VolumeFace::PosY.normal();
+        assert!(
+            entry_world.dot(travel) < -0.9999,
+            "entry {entry_world} light {travel}"
+        );
+        if lo.is_finite() {
+            for i in 0..8 {
+                let c = Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                let local = t.rotation.inverse() * (c - t.translation);
+                assert!(
+                    local
+                        .abs()
+                        .cmple(v.size * 0.5 + 1e-3 * (1.0 + c.abs().max_element()))
+                        .all(),
+                    "corner {c} outside {v:?}"
+                );
+            }
+        }
+    }
+}

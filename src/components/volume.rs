@@ -44,6 +44,54 @@ impl Default for CausticsVolume {
     }
 }
 
+impl CausticsVolume {
+    /// A volume around casters for one light (seed 000 §3.4: photons enter through the entry
+    /// face "seeded with the current direction of the light"): the box's local +Y (the entry
+    /// face `PosY`) points against `light_travel` (for a point or spot light, the direction
+    /// from the light to the casters), the exit face is `NegY`, and the box holds the world
+    /// AABB `casters` (min, max) grown by `margin` (a fraction of each extent, at least 1 mm).
+    ///
+    /// Guards: a zero or non-finite direction is taken as straight down; a non-finite AABB
+    /// gives a 1 m box at the origin; every extent is at least 1e-3 m (the validator's floor).
+    pub fn fit(casters: (Vec3, Vec3), light_travel: Vec3, margin: f32) -> (Self, Transform) {
+        let dir = light_travel.try_normalize().unwrap_or(Vec3::NEG_Y);
+        let (lo, hi) = if casters.0.is_finite() && casters.1.is_finite() {
+            (casters.0.min(casters.1), casters.0.max(casters.1))
+        } else {
+            (Vec3::splat(-0.5), Vec3::splat(0.5))
+        };
+        let rotation = Quat::from_rotation_arc(Vec3::Y, -dir);
+        let center = (lo + hi) * 0.5;
+        let inv = rotation.inverse();
+        let mut local_half = Vec3::ZERO;
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            local_half = local_half.max((inv * (corner - center)).abs());
+        }
+        let margin = if margin.is_finite() {
+            margin.max(0.0)
+        } else {
+            0.0
+        };
+        let size = (local_half * 2.0 * (1.0 + margin) + Vec3::splat(2e-3)).max(Vec3::splat(1e-3));
+        (
+            Self {
+                size,
+                ..Default::default()
+            },
+            Transform {
+                translation: center,
+                rotation,
+                scale: Vec3::ONE,
+            },
+        )
+    }
+}
+
 /// A face of a volume's box, by the local axis of its outward normal.
 #[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum VolumeFace {
