@@ -140,3 +140,46 @@ fn differentials_and_splats() {
         assert!(s.a.length() <= 10.0 + 1e-3 && s.b.length() >= 1e-4 * 0.999);
     }
 }
+
+/// `AapsSettings` out of range: every bad field is clamped and reported once by name.
+#[test]
+fn aaps_settings_are_sanitized() {
+    use bevy_caustics::AapsSettings;
+    use bevy_caustics::components::validate::sanitize_aaps;
+    let mut ok = AapsSettings::default();
+    assert!(sanitize_aaps(&mut ok).is_empty());
+    let mut bad = AapsSettings {
+        atlas_resolution: 100,
+        target_area: f32::NAN,
+        temporal_weight: 3.0,
+        min_density: 0.0,
+        splat_scale: -1.0,
+        max_anisotropy: 0.5,
+        max_bounces: 0,
+        splat_capacity: 0,
+        ..Default::default()
+    };
+    let fixes = sanitize_aaps(&mut bad);
+    let fields: Vec<&str> = fixes.iter().map(|f| f.0).collect();
+    assert_eq!(
+        fields,
+        [
+            "atlas_resolution",
+            "target_area",
+            "temporal_weight",
+            "min_density",
+            "splat_scale",
+            "max_anisotropy",
+            "max_bounces",
+            "splat_capacity"
+        ]
+    );
+    assert_eq!(bad.atlas_resolution, 128);
+    assert_eq!(bad.target_area, 19.0);
+    assert_eq!(bad.temporal_weight, 1.0);
+    assert_eq!(bad.min_density, 1.0);
+    assert!(
+        sanitize_aaps(&mut bad).is_empty(),
+        "a clamped value is valid"
+    );
+}
