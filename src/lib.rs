@@ -26,6 +26,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod scenes;
+pub mod volume;
 
 use bevy::prelude::*;
 use bevy::render::RenderApp;

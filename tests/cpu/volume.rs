@@ -85,3 +85,105 @@ fn volume_fit_holds_the_casters_and_faces_the_light() {
         }
     }
 }
+
+/// Seed 000 §3.4: photons spread evenly over the entry face carry the light's irradiance on
+/// it: the total is E⊥ cos θ A for a directional light, and Φ Ω / 4π for a point light (Ω the
+/// face's solid angle, closed form for a rectangle seen on its axis); the pool is split
+/// equally between lights; light from behind the face gives nothing.
+#[test]
+fn volume_photons_carry_the_entry_face_irradiance() {
+    use bevy_caustics::VolumeFace;
+    use bevy_caustics::scene::TraceLight;
+    use bevy_caustics::volume::seed_photons;
+    use glam::{Affine3A, Quat};
+    let sum =
+        |v: &[bevy_caustics::volume::VolumePhoton]| v.iter().map(|p| p.flux.x as f64).sum::<f64>();
+    let id = Affine3A::IDENTITY;
+    let e = 1000.0;
+    for deg in [0.0f32, 30.0, 89.0] {
+        let a = deg.to_radians();
+        let sun = TraceLight::Directional {
+            direction: Vec3::new(a.sin(), -a.cos(), 0.0),
+            illuminance: Vec3::splat(e),
+        };
+        let p = seed_photons(
+            &id,
+            Vec3::new(1.0, 0.5, 2.0),
+            VolumeFace::PosY,
+            &[sun],
+            20_000,
+        );
+        let expect = e as f64 * (a.cos() as f64) * 2.0;
+        assert!(
+            (sum(&p) / expect - 1.0).abs() < 1e-4,
+            "{deg}: {} vs {expect}",
+            sum(&p)
+        );
+        assert!(
+            p.iter()
+                .all(|q| (q.position.y - 0.25).abs() < 1e-6 && !q.terminated)
+        );
+    }
+    // From below: nothing enters through the top face.
+    let under = TraceLight::Directional {
+        direction: Vec3::Y,
+        illuminance: Vec3::splat(e),
+    };
+    let p = seed_photons(&id, Vec3::ONE, VolumeFace::PosY, &[under], 1000);
+    assert!(p.iter().all(|q| q.terminated && q.flux == Vec3::ZERO));
+    // A point light on the axis of a 2 x 2 face, 0.5 m above it.
+    let flux = 4000.0f32;
+    let bulb = TraceLight::Point {
+        position: Vec3::new(0.0, 1.0, 0.0),
+        flux: Vec3::splat(flux),
+    };
+    let p = seed_photons(
+        &id,
+        Vec3::new(2.0, 1.0, 2.0),
+        VolumeFace::PosY,
+        &[bulb],
+        250_000,
+    );
+    let (a, b, h) = (1.0f64, 1.0f64, 0.5f64);
+    let omega = 4.0 * (a * b / ((a * a + h * h) * (b * b + h * h)).sqrt()).asin();
+    let expect = flux as f64 * omega / (4.0 * std::f64::consts::PI);
+    let err = sum(&p) / expect - 1.0;
+    println!(
+        "point light through a face: {} lm vs {expect:.2} lm ({:+.4} %)",
+        sum(&p),
+        err * 100.0
+    );
+    assert!(err.abs() < 1e-3);
+    // Two lights share the pool equally; a scaled, rotated volume scales the area.
+    let sun = TraceLight::Directional {
+        direction: Vec3::NEG_Y,
+        illuminance: Vec3::splat(e),
+    };
+    let two = seed_photons(&id, Vec3::ONE, VolumeFace::PosY, &[sun, bulb], 10_000);
+    // Each light gets the same grid, as close to half the pool as a grid allows.
+    assert!(
+        two.len() % 2 == 0 && two.len() <= 10_000 && two.len() >= 9_800,
+        "{}",
+        two.len()
+    );
+    let half = two.len() / 2;
+    assert!(two[..half].iter().all(|q| q.direction == Vec3::NEG_Y));
+    assert!(two[half..].iter().all(|q| q.direction != Vec3::NEG_Y));
+    let m = Affine3A::from_scale_rotation_translation(
+        Vec3::splat(2.0),
+        Quat::from_rotation_y(0.7),
+        Vec3::new(5.0, 1.0, -3.0),
+    );
+    let p = seed_photons(&m, Vec3::ONE, VolumeFace::PosY, &[sun], 10_000);
+    assert!((sum(&p) / (e as f64 * 4.0) - 1.0).abs() < 1e-4);
+    // Guards: no photons, no lights, a degenerate box, a NaN transform.
+    assert!(seed_photons(&id, Vec3::ONE, VolumeFace::PosY, &[sun], 0).is_empty());
+    assert!(seed_photons(&id, Vec3::ONE, VolumeFace::PosY, &[], 100).is_empty());
+    assert!(seed_photons(&id, Vec3::ZERO, VolumeFace::PosY, &[sun], 100).is_empty());
+    let nan = Affine3A::from_translation(Vec3::NAN);
+    assert!(
+        seed_photons(&nan, Vec3::ONE, VolumeFace::PosY, &[sun], 100)
+            .iter()
+            .all(|q| q.flux.is_finite())
+    );
+}
