@@ -162,7 +162,7 @@ fn volume_photons_carry_the_entry_face_irradiance() {
     let two = seed_photons(&id, Vec3::ONE, VolumeFace::PosY, &[sun, bulb], 10_000);
     // Each light gets the same grid, as close to half the pool as a grid allows.
     assert!(
-        two.len() % 2 == 0 && two.len() <= 10_000 && two.len() >= 9_800,
+        two.len().is_multiple_of(2) && two.len() <= 10_000 && two.len() >= 9_800,
         "{}",
         two.len()
     );
