@@ -100,13 +100,7 @@ pub fn seed_photons(
                         (d, illuminance * (-d.dot(n)).max(0.0))
                     }
                     TraceLight::Point { position, flux } => {
-                        let to = p - position;
-                        let r2 = to.length_squared().max(1e-12);
-                        let d = to.try_normalize().unwrap_or(-n);
-                        (
-                            d,
-                            flux / (4.0 * core::f32::consts::PI) * (-d.dot(n)).max(0.0) / r2,
-                        )
+                        point_irradiance(p, n, position, flux, 1.0)
                     }
                     TraceLight::Spot {
                         position,
@@ -115,15 +109,10 @@ pub fn seed_photons(
                         inner_angle,
                         outer_angle,
                     } => {
-                        let to = p - position;
-                        let r2 = to.length_squared().max(1e-12);
-                        let d = to.try_normalize().unwrap_or(-n);
                         let axis = direction.try_normalize().unwrap_or(Vec3::NEG_Y);
+                        let d = (p - position).try_normalize().unwrap_or(-n);
                         let fall = optics::spot_attenuation(d.dot(axis), inner_angle, outer_angle);
-                        (
-                            d,
-                            flux / (4.0 * core::f32::consts::PI) * fall * (-d.dot(n)).max(0.0) / r2,
-                        )
+                        point_irradiance(p, n, position, flux, fall)
                     }
                 };
                 let flux = optics::finite_or_zero(irradiance * cell_area);
@@ -142,4 +131,16 @@ pub fn seed_photons(
         }
     }
     out
+}
+
+/// Direction from a point or spot light at `position` to `p`, and the irradiance it gives the
+/// face of normal `n` there: `Φ / 4π · falloff · cos θ / r²`.
+fn point_irradiance(p: Vec3, n: Vec3, position: Vec3, flux: Vec3, falloff: f32) -> (Vec3, Vec3) {
+    let to = p - position;
+    let r2 = to.length_squared().max(1e-12);
+    let d = to.try_normalize().unwrap_or(-n);
+    (
+        d,
+        flux / (4.0 * core::f32::consts::PI) * falloff * (-d.dot(n)).max(0.0) / r2,
+    )
 }

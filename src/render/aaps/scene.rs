@@ -7,7 +7,7 @@ use bevy::render::renderer::RenderDevice;
 use glam::Vec3;
 
 use crate::optics;
-use crate::scene::{CausticsScene, GpuBvh, Surface, Tlas, TraceLight};
+use crate::scene::{CausticsScene, GpuBvh, Tlas, TraceLight};
 
 /// One light on the GPU (80 bytes; `AapsLight` in common.wgsl).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -191,10 +191,14 @@ fn f4(v: &[[f32; 4]]) -> Vec<u8> {
 }
 
 impl AapsSceneBuffers {
-    /// Flatten and upload `scene`.
-    pub fn upload(device: &RenderDevice, scene: &CausticsScene) -> Self {
-        let bvh = GpuBvh::from_tlas(&scene.tlas);
+    /// Flatten and upload `scene`; `None` when no caustic light reaches a caster (nothing for
+    /// AAPS to do).
+    pub fn upload(device: &RenderDevice, scene: &CausticsScene) -> Option<Self> {
         let lights = aaps_lights(&scene.tlas, &scene.lights);
+        if lights.is_empty() {
+            return None;
+        }
+        let bvh = GpuBvh::from_tlas(&scene.tlas);
         let mut light_bytes: Vec<u8> = lights.iter().flat_map(|(_, l)| l.bytes()).collect();
         light_bytes.resize(light_bytes.len().max(80), 0);
         let mut prims: Vec<u8> = bvh
@@ -236,22 +240,11 @@ impl AapsSceneBuffers {
             .tlas
             .bounds_where(|_| true)
             .map_or(1.0, |(lo, hi)| (hi - lo).max_element());
-        Self {
+        Some(Self {
             generation: scene.generation,
             buffers,
             lights: lights.len() as u32,
             scene_scale,
-        }
+        })
     }
-}
-
-/// True when the scene has something for AAPS to do.
-pub fn has_work(scene: &CausticsScene) -> bool {
-    scene.is_active()
-        && scene
-            .tlas
-            .instances
-            .iter()
-            .any(|i| !matches!(i.surface, Surface::Diffuse { .. }))
-        && !aaps_lights(&scene.tlas, &scene.lights).is_empty()
 }

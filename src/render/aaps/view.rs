@@ -407,22 +407,32 @@ pub fn prepare_aaps_scene(
     extracted: Option<Res<ExtractedCausticsScene>>,
     buffers: Option<Res<AapsSceneBuffers>>,
     views: Query<&ExtractedCaustics>,
+    // The last generation found to have nothing for AAPS (no light reaches a caster).
+    mut idle: Local<Option<u64>>,
 ) {
     let wanted = views.iter().any(|c| c.technique == CausticsTechnique::Aaps);
     let Some(extracted) = extracted.filter(|_| wanted) else {
         if buffers.is_some() {
             commands.remove_resource::<AapsSceneBuffers>();
         }
+        *idle = None;
         return;
     };
-    if !super::scene::has_work(&extracted.0) {
-        if buffers.is_some() {
-            commands.remove_resource::<AapsSceneBuffers>();
+    // Everything below runs once per scene generation, not per frame.
+    let generation = extracted.0.generation;
+    if buffers.as_ref().is_some_and(|b| b.generation == generation) || *idle == Some(generation) {
+        return;
+    }
+    match AapsSceneBuffers::upload(&device, &extracted.0) {
+        Some(b) => {
+            commands.insert_resource(b);
+            *idle = None;
         }
-        return;
+        None => {
+            if buffers.is_some() {
+                commands.remove_resource::<AapsSceneBuffers>();
+            }
+            *idle = Some(generation);
+        }
     }
-    if buffers.is_some_and(|b| b.generation == extracted.0.generation) {
-        return;
-    }
-    commands.insert_resource(AapsSceneBuffers::upload(&device, &extracted.0));
 }
