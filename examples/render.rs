@@ -5,6 +5,7 @@
 //! cargo run --release --example render -- SCENE.gltf --technique reference --width 256 \
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
+//!     [--volume field=value,...]
 //! ```
 //!
 //! Errors (missing file, no camera, no lights, no adapter, bad option) print one line and
@@ -53,7 +54,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
             "--technique" => {
                 let t = v.ok_or("--technique needs a value")?;
                 job.technique = CausticsTechnique::from_name(t).ok_or_else(|| {
-                    format!("unknown technique '{t}' (available: reference, aaps)")
+                    format!("unknown technique '{t}' (available: reference, aaps, volume)")
                 })?;
             }
             "--width" => job.width = num(v, a)? as u32,
@@ -103,6 +104,35 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                     }
                 }
             }
+            "--volume" => {
+                // Settings of the fitted volumes as `field=value,...` (CausticsVolume names).
+                let t = v.ok_or("--volume needs field=value pairs")?;
+                for kv in t.split(',') {
+                    let (k, x) = kv
+                        .split_once('=')
+                        .ok_or_else(|| format!("--volume expects field=value, got '{kv}'"))?;
+                    let f = || {
+                        x.parse::<f32>()
+                            .ok()
+                            .filter(|x| x.is_finite())
+                            .ok_or_else(|| format!("--volume {k} expects a number, got '{x}'"))
+                    };
+                    let a = &mut job.volume;
+                    match k {
+                        "slabs" => a.slabs = f()? as u32,
+                        "photons" => a.photons = f()? as i32,
+                        "projector_resolution" => a.projector_resolution = f()? as u32,
+                        "gbuffer_resolution" => a.gbuffer_resolution = f()? as u32,
+                        "tile_size" => a.tile_size = f()? as u32,
+                        "splat_overlap" => a.splat_overlap = f()?,
+                        "blur_radius" => a.blur_radius = f()? as u32,
+                        "lod_distance" => a.lod_distance = f()?,
+                        "differential" => a.differential = f()? != 0.0,
+                        "frustum_cull" => a.frustum_cull = f()? != 0.0,
+                        _ => return Err(format!("--volume: unknown field '{k}'")),
+                    }
+                }
+            }
             "--out-exr" => out.exr = Some(path(v)?),
             "--out-png" => out.png = Some(path(v)?),
             "--json" => out.json = Some(path(v)?),
@@ -118,7 +148,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...]")?;
     Ok((job, out))
 }
 

@@ -14,6 +14,8 @@ static GPU: Mutex<()> = Mutex::new(());
 mod aaps;
 #[path = "gpu/twins.rs"]
 mod twins;
+#[path = "gpu/volume.rs"]
+mod volume;
 
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

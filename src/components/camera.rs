@@ -52,6 +52,12 @@ pub enum CausticsTechnique {
     /// every frame. Milliseconds per frame. Settings: [`crate::AapsSettings`]. The default.
     #[default]
     Aaps,
+    /// Caustics volumes (seed 000): photons seeded on each [`crate::CausticsVolume`]'s entry
+    /// face, marched slab by slab against rasterised G-buffers (no ray tracing), projected
+    /// onto the receivers beyond the exit faces and splatted. Work is redone only when
+    /// something inside changes (differential updates); otherwise only the splats are drawn.
+    /// Settings: the fields of [`crate::CausticsVolume`]. Without a volume nothing runs.
+    Volume,
 }
 
 impl CausticsTechnique {
@@ -60,6 +66,7 @@ impl CausticsTechnique {
         match self {
             Self::Reference => "reference",
             Self::Aaps => "aaps",
+            Self::Volume => "volume",
         }
     }
 
@@ -68,6 +75,7 @@ impl CausticsTechnique {
         match s {
             "reference" => Some(Self::Reference),
             "aaps" => Some(Self::Aaps),
+            "volume" => Some(Self::Volume),
             _ => None,
         }
     }

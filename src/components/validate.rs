@@ -81,6 +81,60 @@ pub fn sanitize_volume(v: &mut CausticsVolume) -> Vec<Fix> {
         ));
         v.projector_resolution = res;
     }
+    let g = v.gbuffer_resolution.clamp(16, 4096);
+    if g != v.gbuffer_resolution {
+        fixes.push((
+            "gbuffer_resolution",
+            format!(
+                "{} is outside [16, 4096]; clamped to {g}",
+                v.gbuffer_resolution
+            ),
+        ));
+        v.gbuffer_resolution = g;
+    }
+    let t = v.tile_size.clamp(1, 64);
+    if t != v.tile_size {
+        fixes.push((
+            "tile_size",
+            format!("{} is outside [1, 64]; clamped to {t}", v.tile_size),
+        ));
+        v.tile_size = t;
+    }
+    let o = if v.splat_overlap.is_finite() {
+        v.splat_overlap.clamp(0.25, 64.0)
+    } else {
+        4.0
+    };
+    if o != v.splat_overlap {
+        fixes.push((
+            "splat_overlap",
+            format!("{} is outside [0.25, 64]; clamped to {o}", v.splat_overlap),
+        ));
+        v.splat_overlap = o;
+    }
+    let b = v.blur_radius.min(8);
+    if b != v.blur_radius {
+        fixes.push((
+            "blur_radius",
+            format!("{} is above 8; clamped to {b}", v.blur_radius),
+        ));
+        v.blur_radius = b;
+    }
+    let l = if v.lod_distance.is_finite() {
+        v.lod_distance.max(0.0)
+    } else {
+        0.0
+    };
+    if l != v.lod_distance {
+        fixes.push((
+            "lod_distance",
+            format!(
+                "{} is negative or non-finite; clamped to {l}",
+                v.lod_distance
+            ),
+        ));
+        v.lod_distance = l;
+    }
     fixes
 }
 

@@ -2,8 +2,10 @@ use bevy::prelude::*;
 
 /// A caustics volume: an oriented box (its `Transform` places, rotates and scales the unit box
 /// times [`CausticsVolume::size`]) inside which caustics are computed by slab propagation
-/// (seed 000). Declared and validated in this version; its passes come with the `Volume`
-/// technique.
+/// (seed 000) for cameras whose technique is [`crate::CausticsTechnique::Volume`]. Photons
+/// enter through `entry` from every [`crate::CausticLight`], are marched slab by slab against
+/// rasterised G-buffers, and those that leave through an `exit` face after a specular event are
+/// projected onto the receivers beyond it and splatted. A face in neither list culls.
 #[derive(Component, Reflect, Clone, Debug, PartialEq)]
 #[reflect(Component, Default, Clone)]
 #[require(Transform)]
@@ -28,6 +30,30 @@ pub struct CausticsVolume {
     /// Side of each projector's square G-buffer, pixels. Default 200. Range [16, 4096],
     /// clamped with a warning. Cost: quadratic.
     pub projector_resolution: u32,
+    /// Side of each slab's square G_near / G_far, pixels (`G_dims`). Default 200. Range
+    /// [16, 4096], clamped with a warning. Cost: two rasterisations per slab, quadratic.
+    pub gbuffer_resolution: u32,
+    /// Side of a density tile, in projector texels (section 3.4's grid). Default 4. Range
+    /// [1, 64], clamped with a warning. Larger: smoother, blurrier caustics.
+    pub tile_size: u32,
+    /// Photons a splat overlaps (`π r² = overlap · tile area / photons in the tile`). Default
+    /// 4. Range [0.25, 64], clamped with a warning. Energy does not depend on it.
+    pub splat_overlap: f32,
+    /// Radius of the depth- and normal-aware Gaussian applied to the volumes' contribution,
+    /// camera pixels. Default 2; 0 turns the blur off. Range [0, 8], clamped with a warning.
+    pub blur_radius: u32,
+    /// Slab level of detail (section 3.5): beyond this distance from the nearest camera, in
+    /// volume diagonals, the slab count halves for every doubling of the distance. Default 8;
+    /// 0 turns LOD off. Negative or non-finite values are clamped to 0 with a warning.
+    pub lod_distance: f32,
+    /// Differential updates (section 3.5): a change inside slab k re-runs slab k onwards and
+    /// the projectors only, reusing the stored photon states of the earlier slabs. Default on.
+    pub differential: bool,
+    /// A volume outside every caustics camera's frustum runs nothing (section 3.5). Default
+    /// off: a volume's caustics usually land outside it (a mirror out of view lighting a wall
+    /// in view, `mirror_wall`), and the paper's rule would drop them. Turn it on for volumes
+    /// whose receivers are inside them or next to them.
+    pub frustum_cull: bool,
 }
 
 impl Default for CausticsVolume {
@@ -40,6 +66,13 @@ impl Default for CausticsVolume {
             exit: vec![VolumeFace::NegY],
             culling: vec![],
             projector_resolution: 200,
+            gbuffer_resolution: 200,
+            tile_size: 4,
+            splat_overlap: 4.0,
+            blur_radius: 2,
+            lod_distance: 8.0,
+            differential: true,
+            frustum_cull: false,
         }
     }
 }
@@ -50,6 +83,9 @@ impl CausticsVolume {
     /// face `PosY`) points against `light_travel` (for a point or spot light, the direction
     /// from the light to the casters), the exit face is `NegY`, and the box holds the world
     /// AABB `casters` (min, max) grown by `margin` (a fraction of each extent, at least 1 mm).
+    /// Every face but the entry is an exit, so light a mirror sends sideways or back up is
+    /// projected too; no extent is below a quarter of the largest, so flat casters (a mirror)
+    /// still get projectors with usable fields of view.
     ///
     /// Guards: a zero or non-finite direction is taken as straight down; a non-finite AABB
     /// gives a 1 m box at the origin; every extent is at least 1e-3 m (the validator's floor).
@@ -78,9 +114,18 @@ impl CausticsVolume {
             0.0
         };
         let size = (local_half * 2.0 * (1.0 + margin) + Vec3::splat(2e-3)).max(Vec3::splat(1e-3));
+        let size = size.max(Vec3::splat(size.max_element() * 0.25));
         (
             Self {
                 size,
+                exit: vec![
+                    VolumeFace::PosX,
+                    VolumeFace::NegX,
+                    VolumeFace::PosY,
+                    VolumeFace::NegY,
+                    VolumeFace::PosZ,
+                    VolumeFace::NegZ,
+                ],
                 ..Default::default()
             },
             Transform {

@@ -64,6 +64,9 @@ pub struct RenderJob {
     pub mark_lights: bool,
     /// Settings of the `aaps` technique. Default: `AapsSettings::default()`.
     pub aaps: crate::AapsSettings,
+    /// Technique `volume`: the settings of the volumes fitted around the casters (one per
+    /// light) when the scene declares none; its box and faces are ignored.
+    pub volume: crate::CausticsVolume,
 }
 
 impl Default for RenderJob {
@@ -84,6 +87,7 @@ impl Default for RenderJob {
             per_frame: None,
             mark_lights: true,
             aaps: Default::default(),
+            volume: Default::default(),
         }
     }
 }
@@ -130,6 +134,10 @@ pub struct RenderReport {
     pub exposure: f32,
     /// AAPS counters of the last frame (technique `aaps` only).
     pub aaps: Option<AapsCounters>,
+    /// Counters of the first visible volume (technique `volume` only).
+    pub volume: Option<super::volume::VolumeCounters>,
+    /// The caustics passes dispatched in each measured frame.
+    pub frame_passes: Vec<Vec<String>>,
 }
 
 /// The AAPS counters of one frame, read back from the GPU after the render.
@@ -268,6 +276,15 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         .insert_resource(shared.clone())
         .init_resource::<Phase>()
         .add_systems(Startup, start)
+        .insert_resource(super::volume::VolumeTemplate(
+            job.technique == CausticsTechnique::Volume,
+            job.volume.clone(),
+        ))
+        .init_resource::<super::volume::VolumesFitted>()
+        .add_systems(
+            Update,
+            (super::volume::volumes_from_gltf, super::volume::fit_volumes),
+        )
         .add_systems(Update, drive);
     if job.mark_lights {
         app.add_systems(Update, mark_lights);
@@ -421,6 +438,7 @@ fn drive(
     readback: Res<crate::render::readback::CausticsReadback>,
     warnings: Res<crate::CausticsWarnings>,
     frames: Res<FrameCount>,
+    fitted: Res<super::volume::VolumesFitted>,
     mut exit: MessageWriter<AppExit>,
 ) {
     let fail = |msg: String, exit: &mut MessageWriter<AppExit>| {
@@ -543,6 +561,9 @@ fn drive(
             let Ok((status, _, progress)) = main.single() else {
                 return;
             };
+            if job.0.technique == CausticsTechnique::Volume && !fitted.0 {
+                return;
+            }
             if job.0.technique != CausticsTechnique::Reference {
                 log.take();
                 *phase = Phase::Measuring(0);
@@ -576,8 +597,9 @@ fn drive(
             let mut o = shared.0.lock().expect("state");
             // Diagnostics arrive a few frames late: sample after a warm-up.
             if n >= 3 {
-                for pass in
-                    std::iter::once(COMPOSITE_PASS).chain(crate::render::aaps::passes::ALL_PASSES)
+                for pass in std::iter::once(COMPOSITE_PASS)
+                    .chain(crate::render::aaps::passes::ALL_PASSES)
+                    .chain(crate::render::volume::passes::all_passes())
                 {
                     for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
                         let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
@@ -590,11 +612,13 @@ fn drive(
                     }
                 }
             }
-            for p in log.take() {
+            let frame: Vec<String> = log.take().into_iter().map(String::from).collect();
+            for p in &frame {
                 if !o.report.passes.iter().any(|q| q == p) {
-                    o.report.passes.push(p.to_string());
+                    o.report.passes.push(p.clone());
                 }
             }
+            o.report.frame_passes.push(frame);
             if n + 1 >= job.0.frames.max(4) && !job.0.window {
                 if job.0.technique != CausticsTechnique::Reference {
                     readback.request();
@@ -659,7 +683,14 @@ fn drive(
                         .map(|p| (p.to_string(), v))
                 })
                 .collect();
-            if let Some(snap) = o.snapshot.take() {
+            if job.0.technique == CausticsTechnique::Volume
+                && let Some(snap) = o.snapshot.take()
+            {
+                let v = super::volume::VolumeCounters::from_words(&snap.counters);
+                o.report.photons_traced = v.hits;
+                o.report.volume = Some(v);
+                o.report.caustics = Some(snap.image);
+            } else if let Some(snap) = o.snapshot.take() {
                 let c = |i: usize| snap.counters[i] as u64;
                 o.report.photons_traced = c(1);
                 o.report.photons_in_view = c(3) + c(4);

@@ -5,5 +5,7 @@
 //! succeeded.
 
 mod job;
+mod volume;
 
 pub use job::*;
+pub use volume::{VolumeCounters, volume_from_extras};

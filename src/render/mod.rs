@@ -8,6 +8,7 @@
 pub mod aaps;
 pub mod composite;
 pub mod readback;
+pub mod volume;
 
 use std::sync::{Arc, Mutex};
 
@@ -218,7 +219,9 @@ pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
 pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
     composite::build(app);
-    aaps::build(app);
+    if aaps::build(app) {
+        volume::build(app);
+    }
     readback::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;

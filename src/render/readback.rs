@@ -15,6 +15,8 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
 use super::aaps::view::AapsViewState;
+use super::volume::gpu::CNT;
+use super::volume::view::{VolumeStore, VolumeViewState};
 use super::{ExtractedCaustics, ViewCausticsBuffer};
 use crate::reference::CausticImage;
 
@@ -81,11 +83,13 @@ fn copy_for_readback(
         &ViewCausticsBuffer,
         &ExtractedCaustics,
         Option<&AapsViewState>,
+        Option<&VolumeViewState>,
     )>,
+    volumes: Option<Res<VolumeStore>>,
     readback: Res<CausticsReadback>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, _, aaps) = view.into_inner();
+    let (buffer, _, aaps, volume) = view.into_inner();
     let Ok(mut s) = readback.0.lock() else {
         return;
     };
@@ -127,6 +131,18 @@ fn copy_for_readback(
         encoder.copy_buffer_to_buffer(
             &state.accum,
             0,
+            &staging,
+            image_bytes,
+            Some((COUNTER_WORDS * 4) as u64),
+        );
+    }
+    // The volume technique: the counters of the view's first visible volume.
+    if let (Some(state), Some(store)) = (volume, volumes.as_ref())
+        && let Some(v) = state.visible.first().and_then(|&i| store.volumes.get(i))
+    {
+        encoder.copy_buffer_to_buffer(
+            &v.counts,
+            CNT * 4,
             &staging,
             image_bytes,
             Some((COUNTER_WORDS * 4) as u64),

@@ -1,7 +1,12 @@
-//! Caustics volumes (seed 000): the plain-Rust core of the `Volume` technique. This version
-//! has the photon state of the seed's table 2 and the seeding of the entry face (section 3.4);
-//! slab propagation, projectors and splatting are not implemented yet.
+//! Caustics volumes (seed 000): the plain-Rust core of the `Volume` technique — the photon
+//! state of the seed's table 2 and the seeding of the entry face (section 3.4), the volume's
+//! frame, slab probes and projectors ([`VolumeFrame`]), and the splat footprint. The GPU passes
+//! are in `crate::render::volume`.
 
+mod frame;
 mod seed;
+mod splat;
 
+pub use frame::*;
 pub use seed::*;
+pub use splat::*;

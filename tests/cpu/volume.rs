@@ -56,10 +56,9 @@ fn volume_fit_holds_the_casters_and_faces_the_light() {
         let (v, t) = CausticsVolume::fit((lo, hi), dir, 0.1);
         assert!(v.size.is_finite() && v.size.min_element() >= 1e-3, "{v:?}");
         assert!(t.translation.is_finite() && t.rotation.is_finite());
-        assert_eq!(
-            (v.entry, v.exit.as_slice()),
-            (VolumeFace::PosY, &[VolumeFace::NegY][..])
-        );
+        assert_eq!(v.entry, VolumeFace::PosY);
+        assert_eq!(v.exit.len(), 6, "every face but none culls: {:?}", v.exit);
+        assert!(v.size.min_element() >= 0.25 * v.size.max_element() * 0.999);
         let travel = dir.try_normalize().unwrap_or(Vec3::NEG_Y);
         let entry_world = t.rotation * VolumeFace::PosY.normal();
         assert!(

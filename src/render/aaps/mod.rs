@@ -60,17 +60,18 @@ fn extract_scene(
 }
 
 /// Render-app part; called from [`crate::render::build`] after the capability gate.
-pub(crate) fn build(app: &mut App) {
+/// Returns whether AAPS (and so the shared scene extraction) is on.
+pub(crate) fn build(app: &mut App) -> bool {
     let (features, storage, msaa) = {
         let Some(render_app) = app.get_sub_app(RenderApp) else {
-            return;
+            return false;
         };
         let w = render_app.world();
         let (Some(device), Some(adapter)) = (
             w.get_resource::<RenderDevice>(),
             w.get_resource::<RenderAdapter>(),
         ) else {
-            return;
+            return false;
         };
         let f = adapter.get_texture_format_features(TextureFormat::Rgba32Float);
         let msaa = f.flags.sample_count_supported(4)
@@ -91,7 +92,7 @@ pub(crate) fn build(app: &mut App) {
             "bevy_caustics: the Aaps technique is disabled: the GPU lacks {}",
             missing.join(", ")
         );
-        return;
+        return false;
     }
     if !msaa {
         warn!(
@@ -112,7 +113,7 @@ pub(crate) fn build(app: &mut App) {
         }
     };
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-        return;
+        return false;
     };
     render_app
         .insert_resource(shaders)
@@ -133,4 +134,5 @@ pub(crate) fn build(app: &mut App) {
                 .after(deferred_lighting)
                 .before(super::composite::composite_caustics),
         );
+    true
 }

@@ -27,6 +27,7 @@ use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderStartup, RenderSy
 use bevy::shader::Shader;
 
 use super::aaps::view::AapsFrame;
+use super::volume::view::VolumeViewFrame;
 use super::{CausticsDispatchLog, ExtractedCaustics, ViewCausticsBuffer};
 use crate::components::CausticsTechnique;
 
@@ -127,13 +128,14 @@ pub fn composite_caustics(
         &ExtractedCaustics,
         &CompositePipelineId,
         Option<&AapsFrame>,
+        Option<&VolumeViewFrame>,
     )>,
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,
     log: Res<CausticsDispatchLog>,
     mut ctx: RenderContext,
 ) {
-    let (target, prepass, buffer, camera, caustics, id, aaps) = view.into_inner();
+    let (target, prepass, buffer, camera, caustics, id, aaps, volume) = view.into_inner();
     let (Some(render_pipeline), Some(gbuffer)) =
         (cache.get_render_pipeline(**id), prepass.deferred_view())
     else {
@@ -144,6 +146,8 @@ pub fn composite_caustics(
         CausticsTechnique::Reference => buffer.uploaded != 0,
         // AAPS fills it this frame, or has nothing to do.
         CausticsTechnique::Aaps => aaps.is_some(),
+        // Volumes fill it this frame, or none is visible.
+        CausticsTechnique::Volume => volume.is_some(),
     };
     if !filled {
         return;

@@ -1,0 +1,197 @@
+//! Caustics volumes in the headless renderer: fit one volume per light around the casters when
+//! the scene declares none (`--technique volume`), glTF `extras` volumes, and the counters.
+
+use bevy::prelude::*;
+use serde::Serialize;
+
+use crate::components::{CausticsVolume, VolumeFace};
+use crate::scene::{CausticsScene, TraceLight};
+
+/// Volumes are in place (declared, fitted, or there was nothing to fit).
+#[derive(Resource, Default)]
+pub(crate) struct VolumesFitted(pub bool);
+
+/// The settings a fitted volume takes from the job (everything but its box and faces).
+pub(crate) fn apply_template(v: &mut CausticsVolume, t: &CausticsVolume) {
+    v.slabs = t.slabs;
+    v.photons = t.photons;
+    v.projector_resolution = t.projector_resolution;
+    v.gbuffer_resolution = t.gbuffer_resolution;
+    v.tile_size = t.tile_size;
+    v.splat_overlap = t.splat_overlap;
+    v.blur_radius = t.blur_radius;
+    v.lod_distance = t.lod_distance;
+    v.differential = t.differential;
+    v.frustum_cull = t.frustum_cull;
+}
+
+/// Fit one volume per caustic light around the casters (their world box), entry face towards
+/// the light, once the scene is gathered, unless a volume exists already.
+pub(crate) fn fit_volumes(
+    mut commands: Commands,
+    template: Res<VolumeTemplate>,
+    scene: Option<Res<CausticsScene>>,
+    existing: Query<(), With<CausticsVolume>>,
+    mut fitted: ResMut<VolumesFitted>,
+) {
+    if fitted.0 || !template.0 {
+        return;
+    }
+    if !existing.is_empty() {
+        fitted.0 = true;
+        return;
+    }
+    let Some(scene) = scene else {
+        return;
+    };
+    if scene.lights.is_empty() {
+        return;
+    }
+    let Some(bounds) = scene.tlas.bounds_where(|i| i.surface.is_specular()) else {
+        // No caster: nothing to fit, nothing to run.
+        fitted.0 = true;
+        return;
+    };
+    let centre = (bounds.0 + bounds.1) * 0.5;
+    for (_, light) in &scene.lights {
+        let travel = match *light {
+            TraceLight::Directional { direction, .. } => direction,
+            TraceLight::Point { position, .. } | TraceLight::Spot { position, .. } => {
+                centre - position
+            }
+        };
+        let (mut v, t) = CausticsVolume::fit(bounds, travel, 0.1);
+        apply_template(&mut v, &template.1);
+        commands.spawn((v, t, Name::new("caustics volume (fitted)")));
+    }
+    fitted.0 = true;
+}
+
+/// Whether to fit volumes, and the settings they take.
+#[derive(Resource, Clone, Default)]
+pub(crate) struct VolumeTemplate(pub bool, pub CausticsVolume);
+
+/// A volume declared on a glTF node: `extras` with a `caustics_volume` object (see the
+/// README's "Caustics volumes" section for the keys). The node's transform places the box.
+pub fn volume_from_extras(json: &str) -> Option<CausticsVolume> {
+    let v: serde_json::Value = serde_json::from_str(json).ok()?;
+    let o = v.get("caustics_volume")?;
+    let mut vol = CausticsVolume::default();
+    let face = |s: &serde_json::Value| -> Option<VolumeFace> {
+        Some(match s.as_str()? {
+            "PosX" | "+X" => VolumeFace::PosX,
+            "NegX" | "-X" => VolumeFace::NegX,
+            "PosY" | "+Y" => VolumeFace::PosY,
+            "NegY" | "-Y" => VolumeFace::NegY,
+            "PosZ" | "+Z" => VolumeFace::PosZ,
+            "NegZ" | "-Z" => VolumeFace::NegZ,
+            _ => return None,
+        })
+    };
+    let faces = |k: &str| -> Option<Vec<VolumeFace>> {
+        o.get(k)?
+            .as_array()
+            .map(|a| a.iter().filter_map(face).collect())
+    };
+    if let Some(s) = o.get("size").and_then(|s| s.as_array())
+        && s.len() == 3
+    {
+        let c = |i: usize| s[i].as_f64().unwrap_or(1.0) as f32;
+        vol.size = Vec3::new(c(0), c(1), c(2));
+    }
+    let u = |k: &str| o.get(k).and_then(|x| x.as_u64());
+    if let Some(x) = u("slabs") {
+        vol.slabs = x.min(u32::MAX as u64) as u32;
+    }
+    if let Some(x) = o.get("photons").and_then(|x| x.as_i64()) {
+        vol.photons = x.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+    }
+    if let Some(x) = u("projector_resolution") {
+        vol.projector_resolution = x.min(u32::MAX as u64) as u32;
+    }
+    if let Some(x) = u("gbuffer_resolution") {
+        vol.gbuffer_resolution = x.min(u32::MAX as u64) as u32;
+    }
+    if let Some(f) = o.get("entry").and_then(face) {
+        vol.entry = f;
+    }
+    if let Some(f) = faces("exit") {
+        vol.exit = f;
+    }
+    if let Some(f) = faces("culling") {
+        vol.culling = f;
+    }
+    Some(vol)
+}
+
+/// Insert a [`CausticsVolume`] on glTF nodes whose extras declare one.
+pub(crate) fn volumes_from_gltf(
+    mut commands: Commands,
+    nodes: Query<(Entity, &bevy::gltf::GltfExtras), Without<CausticsVolume>>,
+) {
+    for (e, extras) in &nodes {
+        if let Some(v) = volume_from_extras(&extras.value) {
+            commands.entity(e).insert(v);
+        }
+    }
+}
+
+/// The counters of a volume after the render (technique `volume`).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct VolumeCounters {
+    /// Luminous flux seeded on the entry face, lm.
+    pub entered_lm: f64,
+    /// Luminous flux of the photons given a receiver (splatted), lm.
+    pub splatted_lm: f64,
+    /// Photons given a receiver beyond an exit face or inside.
+    pub hits: u64,
+    /// Of which contributive photons stopped on a diffuse surface inside the volume.
+    pub deposits: u64,
+    /// Contributive photons whose projector found no diffuse receiver.
+    pub missed: u64,
+    /// Contributive photons through a culling face.
+    pub culled: u64,
+    /// Total internal reflections.
+    pub tir: u64,
+    /// Non-finite states caught.
+    pub nan_guards: u64,
+    /// Photons that turned back across an inner slab boundary.
+    pub backward: u64,
+    /// Projector hits on specular receivers (not drawn).
+    pub specular_outside: u64,
+    /// Marches stopped by the step limit.
+    pub step_limit: u64,
+    /// Refractions.
+    pub refracted: u64,
+    /// Reflections (mirrors and Fresnel).
+    pub reflected: u64,
+    /// Transmissive hits the media rules ignored.
+    pub ignored: u64,
+    /// Non-contributive photons stopped on diffuse surfaces.
+    pub absorbed: u64,
+}
+
+impl VolumeCounters {
+    /// From the counter words (`C_*` in common.wgsl).
+    pub fn from_words(c: &[u32]) -> Self {
+        let u = |i: usize| c.get(i).copied().unwrap_or(0) as u64;
+        let f = |i: usize| f32::from_bits(c.get(i).copied().unwrap_or(0)) as f64;
+        Self {
+            entered_lm: f(0),
+            splatted_lm: f(1),
+            hits: u(2),
+            deposits: u(3),
+            missed: u(4),
+            culled: u(5),
+            tir: u(6),
+            nan_guards: u(7),
+            backward: u(8),
+            specular_outside: u(9),
+            step_limit: u(10),
+            refracted: u(11),
+            reflected: u(12),
+            ignored: u(13),
+            absorbed: u(14),
+        }
+    }
+}

@@ -1,0 +1,556 @@
+//! GPU state of caustics volumes (render world): the scene's triangles for the probes, and per
+//! volume the photon levels (one per slab boundary, so a differential update restarts from any
+//! slab), the live lists, the final states, the receiver hits, the density tiles, the slab and
+//! projector G-buffers, and the change signatures that decide what re-runs.
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::sync::atomic::AtomicBool;
+
+use bevy::prelude::*;
+use bevy::render::render_resource::{
+    Buffer, BufferDescriptor, BufferInitDescriptor, BufferUsages, Extent3d, Texture,
+    TextureDescriptor, TextureDimension, TextureUsages, TextureView, TextureViewDescriptor,
+    TextureViewDimension,
+};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use glam::{Affine3A, Mat4, Vec3, Vec4};
+
+use super::pipelines::{GBUFFER_DEPTH_FORMAT, GBUFFER_FORMAT};
+use crate::components::CausticsVolume;
+use crate::optics;
+use crate::scene::CausticsScene;
+use crate::scene::gpu::material_rows;
+use crate::volume::{VolumeFrame, face_code, seed_photons};
+
+/// Stride of the probe uniforms (dynamic offsets).
+pub const PROBE_STRIDE: u64 = 256;
+/// Words of the counts buffer: live counts per level (<= 65), then the counters at `CNT`.
+pub const COUNT_WORDS: u64 = 104;
+/// First counter word (`CNT` in common.wgsl).
+pub const CNT: u64 = 72;
+/// Bytes of a photon / hit record.
+const RECORD: u64 = 64;
+
+/// The scene's triangles in world space for the probes, and what the signatures need.
+pub struct VolumeScene {
+    /// `CausticsScene::generation` it was built from.
+    pub generation: u64,
+    /// 6 `vec4` per triangle: (position, instance) and normal per corner.
+    pub tris: Buffer,
+    /// 3 `vec4` per instance ([`material_rows`]).
+    pub materials: Buffer,
+    /// Triangles.
+    pub tri_count: u32,
+    /// World box of everything (projector march range).
+    pub bounds: (Vec3, Vec3),
+    /// Largest extent of the scene, metres.
+    pub scale: f32,
+}
+
+impl VolumeScene {
+    /// Flatten every instance's triangles into world space (degenerate and non-finite
+    /// triangles left out).
+    pub fn build(device: &RenderDevice, scene: &CausticsScene) -> Self {
+        let mut tris: Vec<f32> = Vec::new();
+        let mut mats: Vec<f32> = Vec::new();
+        let mut lo = Vec3::splat(f32::MAX);
+        let mut hi = Vec3::splat(f32::MIN);
+        for (index, inst) in scene.tlas.instances.iter().enumerate() {
+            mats.extend(material_rows(&inst.surface).iter().flatten());
+            let g = &inst.blas.geometry;
+            for tri in &g.indices {
+                let p = tri.map(|i| {
+                    g.positions
+                        .get(i as usize)
+                        .map_or(Vec3::NAN, |v| inst.world_from_local.transform_point3(*v))
+                });
+                let geo = (p[1] - p[0]).cross(p[2] - p[0]);
+                if !p.iter().all(|v| v.is_finite()) || !(geo.length_squared() > 0.0) {
+                    continue;
+                }
+                let gn = geo.normalize();
+                for (c, v) in p.iter().enumerate() {
+                    let n = g
+                        .normals
+                        .as_ref()
+                        .and_then(|ns| ns.get(tri[c] as usize))
+                        .map(|n| inst.normal_matrix * *n)
+                        .and_then(|n| n.try_normalize())
+                        .unwrap_or(gn);
+                    tris.extend([v.x, v.y, v.z, index as f32, n.x, n.y, n.z, 0.0]);
+                    lo = lo.min(*v);
+                    hi = hi.max(*v);
+                }
+            }
+        }
+        if tris.is_empty() {
+            tris.extend([0.0; 24]);
+            lo = Vec3::ZERO;
+            hi = Vec3::ZERO;
+        }
+        if mats.is_empty() {
+            mats.extend([0.0; 12]);
+        }
+        let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+        let tri_count = if scene.tlas.instances.is_empty() {
+            0
+        } else {
+            (tris.len() / 24) as u32
+        };
+        Self {
+            generation: scene.generation,
+            tris: device.create_buffer_with_data(&BufferInitDescriptor {
+                label: Some("caustics:buffer:volume_tris"),
+                contents: &bytes(&tris),
+                usage: BufferUsages::STORAGE,
+            }),
+            materials: device.create_buffer_with_data(&BufferInitDescriptor {
+                label: Some("caustics:buffer:volume_materials"),
+                contents: &bytes(&mats),
+                usage: BufferUsages::STORAGE,
+            }),
+            tri_count,
+            bounds: (lo, hi),
+            scale: (hi - lo).max_element().max(1e-3),
+        }
+    }
+}
+
+/// What decides a volume's buffer sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VolumeKey {
+    /// Photon capacity.
+    pub capacity: u32,
+    /// Effective slab count (after LOD).
+    pub slabs: u32,
+    /// Slab G-buffer side.
+    pub gbuffer: u32,
+    /// Projector G-buffer side.
+    pub projector: u32,
+    /// Density tile side.
+    pub tile: u32,
+}
+
+/// Change signatures (section 3.5's differential updates).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Signatures {
+    /// Frame, faces and settings of the volume.
+    pub volume: u64,
+    /// The lights.
+    pub lights: u64,
+    /// The instances touching each slab.
+    pub slabs: Vec<u64>,
+    /// The whole scene (receivers outside the volume: projectors only).
+    pub generation: u64,
+}
+
+/// One volume on the GPU.
+pub struct VolumeGpu {
+    /// The main-world entity.
+    pub entity: Entity,
+    /// Sizes.
+    pub key: VolumeKey,
+    /// Geometry.
+    pub frame: VolumeFrame,
+    /// Exit faces, bit per face code.
+    pub exit_mask: u32,
+    /// `VolParams`.
+    pub params: Buffer,
+    /// `VolStep` entries: slab k near 2k, far 2k + 1, projector face f at 2 slabs + f,
+    /// deposits at 2 slabs + 6.
+    pub probes: Buffer,
+    /// Photon states per level (slabs levels of `capacity`).
+    pub states: Buffer,
+    /// Live photon indices per level.
+    pub live: Buffer,
+    /// Live counts per level and counters.
+    pub counts: Buffer,
+    /// Final state of every photon.
+    pub finals: Buffer,
+    /// Receiver hit of every photon.
+    pub hits: Buffer,
+    /// Photons per density tile (7 sets).
+    pub tiles: Buffer,
+    /// Indirect dispatch arguments per slab.
+    pub args: Buffer,
+    /// G_near / G_far of every slab (layers 2k, 2k + 1).
+    pub slab_gbuffer: Texture,
+    /// One view per slab layer.
+    pub slab_layers: Vec<TextureView>,
+    /// All slab layers.
+    pub slab_array: TextureView,
+    /// Projector G-buffers (layer = face code).
+    pub cube_gbuffer: Texture,
+    /// One view per face.
+    pub cube_layers: Vec<TextureView>,
+    /// All faces.
+    pub cube_array: TextureView,
+    /// Depth attachment of the slab passes.
+    pub slab_depth: TextureView,
+    /// Depth attachment of the projector passes.
+    pub cube_depth: TextureView,
+    /// Last signatures.
+    pub sig: Signatures,
+    /// First slab to re-run this frame (`slabs`: projectors only); `None`: nothing.
+    pub pending: Option<u32>,
+    /// Set by the passes when they ran `pending`.
+    pub ran: AtomicBool,
+    /// In some caustics camera's frustum (or culling off).
+    pub visible: bool,
+    /// Luminous flux seeded, lm.
+    pub entered: f32,
+}
+
+fn storage(device: &RenderDevice, label: &'static str, size: u64, extra: BufferUsages) -> Buffer {
+    device.create_buffer(&BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: BufferUsages::STORAGE | BufferUsages::COPY_DST | extra,
+        mapped_at_creation: false,
+    })
+}
+
+fn layered(
+    device: &RenderDevice,
+    label: &'static str,
+    side: u32,
+    layers: u32,
+) -> (Texture, Vec<TextureView>, TextureView) {
+    let texture = device.create_texture(&TextureDescriptor {
+        label: Some(label),
+        size: Extent3d {
+            width: side,
+            height: side,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: TextureDimension::D2,
+        format: GBUFFER_FORMAT,
+        usage: TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let views = (0..layers)
+        .map(|l| {
+            texture.create_view(&TextureViewDescriptor {
+                dimension: Some(TextureViewDimension::D2),
+                base_array_layer: l,
+                array_layer_count: Some(1),
+                ..default()
+            })
+        })
+        .collect();
+    let all = texture.create_view(&TextureViewDescriptor {
+        dimension: Some(TextureViewDimension::D2Array),
+        ..default()
+    });
+    (texture, views, all)
+}
+
+fn depth(device: &RenderDevice, side: u32) -> TextureView {
+    device
+        .create_texture(&TextureDescriptor {
+            label: Some("caustics:texture:volume_depth"),
+            size: Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: TextureDimension::D2,
+            format: GBUFFER_DEPTH_FORMAT,
+            usage: TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        })
+        .create_view(&TextureViewDescriptor::default())
+}
+
+/// Density tiles per row of the larger G-buffer, squared (the stride of one tile set).
+pub fn tile_stride(key: &VolumeKey) -> u64 {
+    let t = key.gbuffer.max(key.projector).div_ceil(key.tile.max(1)) as u64;
+    t * t
+}
+
+impl VolumeGpu {
+    /// Allocate everything for `key`.
+    pub fn new(device: &RenderDevice, entity: Entity, key: VolumeKey, frame: VolumeFrame) -> Self {
+        let cap = key.capacity as u64;
+        let levels = key.slabs as u64;
+        let (slab_gbuffer, slab_layers, slab_array) = layered(
+            device,
+            "caustics:texture:volume_slabs",
+            key.gbuffer,
+            2 * key.slabs,
+        );
+        let (cube_gbuffer, cube_layers, cube_array) = layered(
+            device,
+            "caustics:texture:volume_projectors",
+            key.projector,
+            6,
+        );
+        Self {
+            entity,
+            key,
+            frame,
+            exit_mask: 0,
+            params: device.create_buffer(&BufferDescriptor {
+                label: Some("caustics:buffer:volume_params"),
+                size: 160,
+                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            probes: device.create_buffer(&BufferDescriptor {
+                label: Some("caustics:buffer:volume_probes"),
+                size: PROBE_STRIDE * (2 * levels + 7),
+                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            states: storage(
+                device,
+                "caustics:buffer:volume_states",
+                levels * cap * RECORD,
+                BufferUsages::empty(),
+            ),
+            live: storage(
+                device,
+                "caustics:buffer:volume_live",
+                levels * cap * 4,
+                BufferUsages::empty(),
+            ),
+            counts: storage(
+                device,
+                "caustics:buffer:volume_counts",
+                COUNT_WORDS * 4,
+                BufferUsages::COPY_SRC,
+            ),
+            finals: storage(
+                device,
+                "caustics:buffer:volume_finals",
+                cap * RECORD,
+                BufferUsages::empty(),
+            ),
+            hits: storage(
+                device,
+                "caustics:buffer:volume_hits",
+                cap * RECORD,
+                BufferUsages::empty(),
+            ),
+            tiles: storage(
+                device,
+                "caustics:buffer:volume_tiles",
+                7 * tile_stride(&key) * 4,
+                BufferUsages::empty(),
+            ),
+            args: device.create_buffer(&BufferDescriptor {
+                label: Some("caustics:buffer:volume_args"),
+                size: 12 * levels.max(1),
+                usage: BufferUsages::STORAGE | BufferUsages::INDIRECT,
+                mapped_at_creation: false,
+            }),
+            slab_gbuffer,
+            slab_layers,
+            slab_array,
+            cube_gbuffer,
+            cube_layers,
+            cube_array,
+            slab_depth: depth(device, key.gbuffer),
+            cube_depth: depth(device, key.projector),
+            sig: Signatures::default(),
+            pending: Some(0),
+            ran: AtomicBool::new(false),
+            visible: false,
+            entered: 0.0,
+        }
+    }
+
+    /// Write `VolParams` and the probe entries.
+    pub fn write_uniforms(
+        &self,
+        queue: &RenderQueue,
+        scene: &VolumeScene,
+        volume: &CausticsVolume,
+        seeded: u32,
+    ) {
+        let f = &self.frame;
+        let mut b: Vec<u8> = Vec::with_capacity(160);
+        let mut fl = |v: f32| b.extend_from_slice(&v.to_le_bytes());
+        for v in [f.centre.x, f.centre.y, f.centre.z, scene.scale] {
+            fl(v);
+        }
+        for i in 0..3 {
+            let a = f.axes.col(i);
+            for v in [a.x, a.y, a.z, f.half[i]] {
+                fl(v);
+            }
+        }
+        let u = |v: u32| f32::from_bits(v);
+        for v in [
+            u(f.e as u32),
+            u(f.j as u32),
+            u(f.k as u32),
+            u((f.s < 0.0) as u32),
+            u(self.key.gbuffer),
+            u(self.key.projector),
+            u(self.key.tile),
+            u(0x2545_f491),
+            u(self.key.capacity),
+            u(self.key.slabs),
+            u(self.exit_mask),
+            u(seeded),
+        ] {
+            fl(v);
+        }
+        for v in [volume.splat_overlap, 16.0, 0.5, 0.0] {
+            fl(v);
+        }
+        let (lo, hi) = scene.bounds;
+        for v in [lo.x, lo.y, lo.z, 0.0, hi.x, hi.y, hi.z, 0.0] {
+            fl(v);
+        }
+        queue.write_buffer(&self.params, 0, &b);
+
+        let far = {
+            let (lo, hi) = scene.bounds;
+            let mut d: f32 = 0.0;
+            for c in 0..8 {
+                let p = Vec3::new(
+                    if c & 1 == 0 { lo.x } else { hi.x },
+                    if c & 2 == 0 { lo.y } else { hi.y },
+                    if c & 4 == 0 { lo.z } else { hi.z },
+                );
+                d = d.max((p - f.centre).length());
+            }
+            d * 1.01 + 1e-3
+        };
+        let n = self.key.slabs;
+        let mut probes = vec![0u8; (PROBE_STRIDE * (2 * n as u64 + 7)) as usize];
+        let mut put = |index: u32, m: Mat4, plane: Vec4, info: [u32; 4]| {
+            let at = index as usize * PROBE_STRIDE as usize;
+            let mut w = Vec::with_capacity(96);
+            for v in m.to_cols_array() {
+                w.extend_from_slice(&v.to_le_bytes());
+            }
+            for v in plane.to_array() {
+                w.extend_from_slice(&v.to_le_bytes());
+            }
+            for v in info {
+                w.extend_from_slice(&v.to_le_bytes());
+            }
+            probes[at..at + w.len()].copy_from_slice(&w);
+        };
+        for k in 0..n {
+            let m = f.slab_clip_from_world(k);
+            put(2 * k, m, f.depth_plane(), [k, 2 * k, 0, 0]);
+            put(2 * k + 1, m, f.depth_plane(), [k, 2 * k + 1, 0, 0]);
+        }
+        for face in 0..6 {
+            let (m, plane) = f.projector(face, far);
+            put(2 * n + face, m, plane, [face, face, 0, 0]);
+        }
+        put(2 * n + 6, Mat4::IDENTITY, Vec4::ZERO, [6, 0, 0, 0]);
+        queue.write_buffer(&self.probes, 0, &probes);
+    }
+
+    /// Seed the entry face (section 3.4) into level 0: states, the identity live list, the
+    /// live count; the other counts and counters are zeroed. Returns the photons seeded.
+    pub fn seed(
+        &mut self,
+        queue: &RenderQueue,
+        world_from_volume: &Affine3A,
+        volume: &CausticsVolume,
+        lights: &[crate::scene::TraceLight],
+    ) -> u32 {
+        let photons = seed_photons(
+            world_from_volume,
+            volume.size,
+            volume.entry,
+            lights,
+            self.key.capacity,
+        );
+        let mut states = Vec::with_capacity(photons.len() * RECORD as usize);
+        let mut live = Vec::new();
+        let mut entered = 0.0;
+        for (i, p) in photons.iter().enumerate() {
+            let flags: u32 = if p.terminated { 4 | (9 << 4) } else { 0 };
+            for v in [
+                p.position.x,
+                p.position.y,
+                p.position.z,
+                0.0,
+                p.direction.x,
+                p.direction.y,
+                p.direction.z,
+                f32::from_bits(flags),
+                p.flux.x,
+                p.flux.y,
+                p.flux.z,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ] {
+                states.extend_from_slice(&v.to_le_bytes());
+            }
+            if !p.terminated {
+                live.extend_from_slice(&(i as u32).to_le_bytes());
+                entered += optics::luminance(p.flux);
+            }
+        }
+        if !states.is_empty() {
+            queue.write_buffer(&self.states, 0, &states);
+        }
+        if !live.is_empty() {
+            queue.write_buffer(&self.live, 0, &live);
+        }
+        let mut counts = vec![0u8; (COUNT_WORDS * 4) as usize];
+        counts[0..4].copy_from_slice(&((live.len() / 4) as u32).to_le_bytes());
+        let at = (CNT * 4) as usize;
+        counts[at..at + 4].copy_from_slice(&(entered as f32).to_le_bytes());
+        queue.write_buffer(&self.counts, 0, &counts);
+        self.entered = entered;
+        photons.len() as u32
+    }
+}
+
+/// Hash of anything `Debug` (settings and lights are small).
+pub fn debug_hash(v: &impl core::fmt::Debug) -> u64 {
+    let mut h = DefaultHasher::new();
+    format!("{v:?}").hash(&mut h);
+    h.finish()
+}
+
+/// Per-slab signatures: every instance touching slab k (its id, transform, surface, mesh)
+/// is hashed into slab k.
+pub fn slab_signatures(frame: &VolumeFrame, scene: &CausticsScene) -> Vec<u64> {
+    let mut hashers: Vec<DefaultHasher> = (0..frame.slabs).map(|_| DefaultHasher::new()).collect();
+    for inst in &scene.tlas.instances {
+        let (lo, hi) = inst.world_bounds();
+        let Some((k0, k1)) = frame.slabs_touched(lo, hi) else {
+            continue;
+        };
+        let mut h = DefaultHasher::new();
+        inst.id.hash(&mut h);
+        for v in inst.world_from_local.to_cols_array() {
+            v.to_bits().hash(&mut h);
+        }
+        format!("{:?}", inst.surface).hash(&mut h);
+        (std::sync::Arc::as_ptr(&inst.blas) as usize).hash(&mut h);
+        let v = h.finish();
+        for k in k0..=k1 {
+            v.hash(&mut hashers[k as usize]);
+        }
+    }
+    hashers.into_iter().map(|h| h.finish()).collect()
+}
+
+/// The exit mask of a volume: bit per face code.
+pub fn exit_mask(volume: &CausticsVolume) -> u32 {
+    let culled: u32 = volume
+        .culling
+        .iter()
+        .fold(0, |m, f| m | (1 << face_code(*f)));
+    volume.exit.iter().fold(0, |m, f| m | (1 << face_code(*f))) & !culled
+}

@@ -1,0 +1,79 @@
+//! The `Volume` technique (seed 000, caustics volumes) on the GPU: photons seeded on each
+//! volume's entry face, slab G-buffers rasterised by orthographic probes (no ray tracing),
+//! texture-space propagation chained by indirect dispatches, exit-face projectors, density
+//! tiles, oriented splats and a depth- and normal-aware blur into the caustics buffer.
+//!
+//! Render-world only. Per frame (see [`passes`]): only what changed re-runs (section 3.5), the
+//! splats and the blur are drawn for every volume camera. Nothing runs for a view whose
+//! technique is not `Volume`, without a volume, without a caustic light, or for a volume
+//! outside every volume camera's frustum.
+
+pub mod gpu;
+pub mod passes;
+pub mod pipelines;
+pub mod view;
+
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::pbr::deferred::deferred_lighting;
+use bevy::prelude::*;
+use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::shader::Shader;
+
+use crate::components::CausticsVolume;
+use view::{ExtractedVolumes, VolumeStore};
+
+fn extract_volumes(
+    mut commands: Commands,
+    volumes: Extract<Query<(Entity, &CausticsVolume, &GlobalTransform)>>,
+) {
+    commands.insert_resource(ExtractedVolumes(
+        volumes
+            .iter()
+            .map(|(e, v, t)| (e, v.clone(), t.affine()))
+            .collect(),
+    ));
+}
+
+/// Render-app part; called from [`crate::render::build`] when AAPS (whose scene extraction
+/// and float-blending requirement it shares) is available.
+pub(crate) fn build(app: &mut App) {
+    let shaders = {
+        let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
+        pipelines::VolumeShaders {
+            compute: shaders.add(Shader::from_wgsl(
+                pipelines::compute_source(),
+                "bevy_caustics/volume_compute.wgsl",
+            )),
+            raster: shaders.add(Shader::from_wgsl(
+                pipelines::raster_source(),
+                "bevy_caustics/volume_raster.wgsl",
+            )),
+            blur: shaders.add(Shader::from_wgsl(
+                include_str!("blur.wgsl"),
+                "bevy_caustics/volume_blur.wgsl",
+            )),
+        }
+    };
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app
+        .insert_resource(shaders)
+        .init_resource::<VolumeStore>()
+        .add_systems(RenderStartup, pipelines::init_volume_pipelines)
+        .add_systems(ExtractSchedule, extract_volumes)
+        .add_systems(
+            Render,
+            view::prepare_volumes
+                .in_set(RenderSystems::PrepareResources)
+                .after(super::prepare_caustics_buffers)
+                .after(super::aaps::view::prepare_aaps_scene),
+        )
+        .add_systems(
+            Core3d,
+            passes::volume_passes
+                .in_set(Core3dSystems::MainPass)
+                .after(deferred_lighting)
+                .before(super::composite::composite_caustics),
+        );
+}

@@ -1,0 +1,298 @@
+//! Per-frame preparation of caustics volumes: LOD, frustum culling, what changed since the last
+//! update (section 3.5's differential updates) and the per-view splat targets.
+
+use std::sync::atomic::Ordering;
+
+use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
+use bevy::render::render_resource::{
+    Buffer, BufferDescriptor, BufferUsages, Extent3d, TextureDescriptor, TextureDimension,
+    TextureUsages, TextureView, TextureViewDescriptor,
+};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::view::ExtractedView;
+use glam::Affine3A;
+
+use super::gpu::{
+    Signatures, VolumeGpu, VolumeKey, VolumeScene, debug_hash, exit_mask, slab_signatures,
+};
+use crate::components::{CausticsTechnique, CausticsVolume};
+use crate::render::aaps::scene::ExtractedCausticsScene;
+use crate::render::{CAUSTICS_BUFFER_FORMAT, ExtractedCaustics};
+use crate::volume::VolumeFrame;
+
+/// The main world's volumes (entity, settings, world from volume).
+#[derive(Resource, Default, Clone)]
+pub struct ExtractedVolumes(pub Vec<(Entity, CausticsVolume, Affine3A)>);
+
+/// Every volume's GPU state and the scene's triangles.
+#[derive(Resource, Default)]
+pub struct VolumeStore {
+    /// Volumes, in extraction order.
+    pub volumes: Vec<VolumeGpu>,
+    /// Triangles and materials.
+    pub scene: Option<VolumeScene>,
+    /// The view that runs this frame's updates (the first caustics-volume view).
+    pub updater: Option<Entity>,
+}
+
+/// Per-view state of the `Volume` technique.
+#[derive(Component)]
+pub struct VolumeViewState {
+    /// Splat target, the view's size.
+    pub target: TextureView,
+    /// Its size.
+    pub size: UVec2,
+    /// `ViewParams`.
+    pub params: Buffer,
+    /// Blur radius and sigma.
+    pub blur: Buffer,
+    /// Indices into [`VolumeStore::volumes`] visible here.
+    pub visible: Vec<usize>,
+}
+
+/// Marker: the view draws volume splats this frame.
+#[derive(Component)]
+pub struct VolumeViewFrame;
+
+/// Effective slab count (section 3.5's level of detail): beyond `lod_distance` volume
+/// diagonals from the nearest camera, halved for every doubling of the distance.
+pub fn lod_slabs(slabs: u32, lod_distance: f32, diagonal: f32, distance: f32) -> u32 {
+    if !(lod_distance > 0.0) || !(diagonal > 0.0) || !distance.is_finite() {
+        return slabs.max(1);
+    }
+    let ratio = distance / (lod_distance * diagonal);
+    if ratio <= 1.0 {
+        return slabs.max(1);
+    }
+    let halvings = (ratio.log2().floor() as u32 + 1).min(31);
+    (slabs >> halvings).max(1)
+}
+
+/// Decide, per volume, what to re-run; allocate and seed as needed.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+pub fn prepare_volumes(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    extracted: Option<Res<ExtractedVolumes>>,
+    scene: Option<Res<ExtractedCausticsScene>>,
+    mut store: ResMut<VolumeStore>,
+    mut views: Query<(
+        Entity,
+        &ExtractedCaustics,
+        &ExtractedCamera,
+        &ExtractedView,
+        Option<&mut VolumeViewState>,
+    )>,
+) {
+    let cams: Vec<(Entity, Mat4, Vec3)> = views
+        .iter()
+        .filter(|(_, c, cam, ..)| {
+            c.technique == CausticsTechnique::Volume
+                && cam
+                    .physical_viewport_size
+                    .is_some_and(|s| s.x > 0 && s.y > 0)
+        })
+        .map(|(e, _, _, view, _)| {
+            let clip = view
+                .clip_from_world
+                .unwrap_or_else(|| view.clip_from_view * view.world_from_view.affine().inverse());
+            (e, clip, view.world_from_view.translation())
+        })
+        .collect();
+    let volumes = extracted.map(|e| e.0.clone()).unwrap_or_default();
+    let scene = scene.filter(|s| !cams.is_empty() && s.0.is_active() && !s.0.lights.is_empty());
+    let Some(scene) = scene else {
+        store.volumes.clear();
+        store.scene = None;
+        store.updater = None;
+        for (e, c, ..) in &views {
+            let mut e = commands.entity(e);
+            e.remove::<VolumeViewFrame>();
+            if c.technique != CausticsTechnique::Volume {
+                e.remove::<VolumeViewState>();
+            }
+        }
+        return;
+    };
+    let scene = &scene.0;
+    if store.scene.as_ref().map(|s| s.generation) != Some(scene.generation) {
+        store.scene = Some(VolumeScene::build(&device, scene));
+    }
+    let lights: Vec<_> = scene.lights.iter().map(|(_, l)| *l).collect();
+    let light_sig = debug_hash(&lights);
+    let max_bytes = device.limits().max_storage_buffer_binding_size as u64;
+    let max_bytes = max_bytes.min(device.limits().max_buffer_size);
+    let mut next: Vec<VolumeGpu> = Vec::new();
+    let mut old: Vec<VolumeGpu> = std::mem::take(&mut store.volumes);
+    let vs = store.scene.as_ref().unwrap();
+    for (entity, volume, affine) in &volumes {
+        if volume.photons <= 0 {
+            continue;
+        }
+        let base = VolumeFrame::new(affine, volume.size, volume.entry, volume.slabs);
+        let diagonal = 2.0 * base.half.length();
+        let nearest = cams
+            .iter()
+            .map(|(_, _, eye)| eye.distance(base.centre))
+            .fold(f32::INFINITY, f32::min);
+        let slabs = lod_slabs(volume.slabs.max(1), volume.lod_distance, diagonal, nearest);
+        let frame = VolumeFrame::new(affine, volume.size, volume.entry, slabs);
+        // Memory guard: the photon levels must fit one storage binding.
+        let per_photon = 64 * slabs as u64;
+        let capacity = (volume.photons as u64)
+            .min(max_bytes / per_photon)
+            .clamp(1, u32::MAX as u64) as u32;
+        let key = VolumeKey {
+            capacity,
+            slabs,
+            gbuffer: volume.gbuffer_resolution.clamp(16, 4096),
+            projector: volume.projector_resolution.clamp(16, 4096),
+            tile: volume.tile_size.clamp(1, 64),
+        };
+        let mut gpu = match old.iter().position(|g| g.entity == *entity && g.key == key) {
+            Some(i) => old.swap_remove(i),
+            None => VolumeGpu::new(&device, *entity, key, frame),
+        };
+        if gpu.ran.swap(false, Ordering::AcqRel) {
+            gpu.pending = None;
+        }
+        gpu.frame = frame;
+        gpu.exit_mask = exit_mask(volume);
+        gpu.visible =
+            !volume.frustum_cull || cams.iter().any(|(_, clip, _)| !frame.outside_frustum(clip));
+        let sig = Signatures {
+            volume: debug_hash(&(
+                frame,
+                gpu.exit_mask,
+                volume.photons,
+                volume.splat_overlap.to_bits(),
+                volume.entry,
+            )),
+            lights: light_sig,
+            slabs: slab_signatures(&frame, scene),
+            generation: scene.generation,
+        };
+        let first_change = if sig.volume != gpu.sig.volume
+            || sig.lights != gpu.sig.lights
+            || sig.slabs.len() != gpu.sig.slabs.len()
+        {
+            Some(0)
+        } else if let Some(k) = (0..sig.slabs.len()).find(|&k| sig.slabs[k] != gpu.sig.slabs[k]) {
+            Some(if volume.differential { k as u32 } else { 0 })
+        } else if sig.generation != gpu.sig.generation {
+            Some(if volume.differential { slabs } else { 0 })
+        } else {
+            None
+        };
+        if first_change == Some(0) && (sig.volume != gpu.sig.volume || sig.lights != gpu.sig.lights)
+        {
+            let seeded = gpu.seed(&queue, affine, volume, &lights);
+            gpu.write_uniforms(&queue, vs, volume, seeded);
+        } else if first_change.is_some() {
+            gpu.write_uniforms(&queue, vs, volume, 0);
+        }
+        if let Some(k) = first_change {
+            gpu.pending = Some(gpu.pending.map_or(k, |p| p.min(k)));
+        }
+        gpu.sig = sig;
+        next.push(gpu);
+    }
+    store.volumes = next;
+    store.updater = cams.first().map(|c| c.0);
+
+    for (entity, caustics, camera, _, state) in &mut views {
+        let mut e = commands.entity(entity);
+        let size = camera.physical_viewport_size.unwrap_or_default();
+        let Some((_, clip, eye)) = cams.iter().find(|c| c.0 == entity) else {
+            e.remove::<VolumeViewFrame>();
+            if caustics.technique != CausticsTechnique::Volume {
+                e.remove::<VolumeViewState>();
+            }
+            continue;
+        };
+        let visible: Vec<usize> = store
+            .volumes
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| g.visible)
+            .map(|(i, _)| i)
+            .collect();
+        if visible.is_empty() {
+            e.remove::<VolumeViewFrame>();
+            continue;
+        }
+        let mut fresh = None;
+        let state = match state {
+            Some(s) if s.size == size => s.into_inner(),
+            _ => {
+                fresh = Some(new_view_state(&device, size));
+                fresh.as_mut().unwrap()
+            }
+        };
+        state.visible = visible;
+        // ViewParams: clip_from_world, world_from_clip, eye + radians per pixel.
+        let p11 = clip.y_axis.y.abs().max(1e-9);
+        let per_pixel = 2.0 / (p11 * size.y.max(1) as f32);
+        let mut b = Vec::with_capacity(144);
+        for v in clip
+            .to_cols_array()
+            .into_iter()
+            .chain(clip.inverse().to_cols_array())
+            .chain([eye.x, eye.y, eye.z, per_pixel])
+        {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        queue.write_buffer(&state.params, 0, &b);
+        let r = volumes
+            .iter()
+            .map(|v| v.1.blur_radius)
+            .max()
+            .unwrap_or(0)
+            .min(8) as f32;
+        let blur: Vec<u8> = [r, (r * 0.5).max(0.5), 0.0, 0.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        queue.write_buffer(&state.blur, 0, &blur);
+        if let Some(s) = fresh {
+            e.insert(s);
+        }
+        e.insert(VolumeViewFrame);
+    }
+}
+
+fn new_view_state(device: &RenderDevice, size: UVec2) -> VolumeViewState {
+    let target = device
+        .create_texture(&TextureDescriptor {
+            label: Some("caustics:texture:volume_splats"),
+            size: Extent3d {
+                width: size.x,
+                height: size.y,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: TextureDimension::D2,
+            format: CAUSTICS_BUFFER_FORMAT,
+            usage: TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+        .create_view(&TextureViewDescriptor::default());
+    let uniform = |label: &'static str, size: u64| {
+        device.create_buffer(&BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    VolumeViewState {
+        target,
+        size,
+        params: uniform("caustics:buffer:volume_view", 144),
+        blur: uniform("caustics:buffer:volume_blur", 16),
+        visible: Vec::new(),
+    }
+}
