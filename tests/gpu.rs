@@ -526,6 +526,35 @@ fn stiff_and_extreme_cases_gpu() {
             "{} (aaps): non-finite caustics",
             case.name
         );
+        // And caustics volumes (one fitted per light, 3 slabs).
+        let vol = run(RenderJob {
+            scene: dir.join(format!("stiff_{i}.gltf")),
+            technique: bevy_caustics::CausticsTechnique::Volume,
+            width: 32,
+            height: 32,
+            frames: 4,
+            volume: bevy_caustics::CausticsVolume {
+                photons: case.photons.min(1 << 16) as i32,
+                gbuffer_resolution: 64,
+                projector_resolution: 64,
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("{} (volume): {e}", case.name));
+        println!("{:<48} volume {:?}", case.name, vol.volume);
+        assert!(
+            vol.caustics.as_ref().unwrap().all_finite(),
+            "{} (volume): non-finite caustics",
+            case.name
+        );
+        if let Some(c) = &vol.volume {
+            assert!(
+                c.splatted_lm <= c.entered_lm * (1.0 + 1e-5),
+                "{}: {c:?}",
+                case.name
+            );
+        }
         let report = run(RenderJob {
             scene: dir.join(format!("stiff_{i}.gltf")),
             width: 32,

@@ -283,9 +283,13 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         .init_resource::<super::volume::VolumesFitted>()
         .add_systems(
             Update,
-            (super::volume::volumes_from_gltf, super::volume::fit_volumes),
-        )
-        .add_systems(Update, drive);
+            (
+                drive,
+                super::volume::volumes_from_gltf,
+                super::volume::fit_volumes,
+            )
+                .chain(),
+        );
     if job.mark_lights {
         app.add_systems(Update, mark_lights);
     }

@@ -32,9 +32,11 @@ pub(crate) fn fit_volumes(
     template: Res<VolumeTemplate>,
     scene: Option<Res<CausticsScene>>,
     existing: Query<(), With<CausticsVolume>>,
+    cameras: Query<(), With<crate::Caustics>>,
     mut fitted: ResMut<VolumesFitted>,
 ) {
-    if fitted.0 || !template.0 {
+    // After the camera and the job's hook (which may declare volumes) are in.
+    if fitted.0 || !template.0 || cameras.is_empty() {
         return;
     }
     if !existing.is_empty() {

@@ -133,7 +133,8 @@ impl SceneDesc {
         }
     }
 
-    fn material(&mut self, name: &str, params: MaterialParams, double_sided: bool) -> usize {
+    /// Add a material; returns its index.
+    pub fn material(&mut self, name: &str, params: MaterialParams, double_sided: bool) -> usize {
         self.materials.push(MaterialDesc {
             name: name.into(),
             params,
@@ -142,7 +143,14 @@ impl SceneDesc {
         self.materials.len() - 1
     }
 
-    fn add(&mut self, name: &str, mesh: MeshGeometry, material: usize, translation: Vec3) -> usize {
+    /// Add a mesh node at `translation`; returns the node index.
+    pub fn add(
+        &mut self,
+        name: &str,
+        mesh: MeshGeometry,
+        material: usize,
+        translation: Vec3,
+    ) -> usize {
         self.meshes.push(Arc::new(mesh));
         self.nodes.push(NodeDesc {
             name: name.into(),

@@ -168,7 +168,7 @@ impl VolumeFrame {
     /// plane giving the stored depth `|q_i|`.
     pub fn projector(&self, code: u32, far: f32) -> (Mat4, Vec4) {
         let i = (code / 2) as usize % 3;
-        let sign = if code % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if code.is_multiple_of(2) { 1.0 } else { -1.0 };
         let (a, b) = match i {
             0 => (1, 2),
             1 => (2, 0),

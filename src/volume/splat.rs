@@ -12,6 +12,7 @@ use crate::optics::orthonormal_basis;
 /// surface of normal `n` hit along the unit ray `r` from the centre covers
 /// `A_plane |r . axis| / |r . n|` of it. Guards: the cosine is at least 1e-3 (grazing
 /// receivers), non-finite inputs give 0.
+#[allow(clippy::too_many_arguments)]
 pub fn projector_texel_area(
     z: f32,
     half_axis: f32,
@@ -40,6 +41,7 @@ pub fn projector_texel_area(
 /// `flux / (π |a| |b|)`. Guards: zero or non-finite inputs give a disc of radius `r_min`
 /// (itself at least 1e-9 m) in the surface plane; a direction along the normal uses any
 /// tangent.
+#[allow(clippy::too_many_arguments)]
 pub fn volume_splat_axes(
     dir: Vec3,
     normal: Vec3,

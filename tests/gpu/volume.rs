@@ -87,3 +87,301 @@ fn volume_closed_forms_and_energy() {
         assert_eq!(c.nan_guards, 0);
     }
 }
+
+/// `glass_sphere` in a fitted volume with 1, 2 and 3 slabs: total caustic energy within 10 %
+/// of the CPU reference; RMSE and FLIP printed for the note.
+#[test]
+fn volume_glass_sphere_against_reference() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let reference = reference("glass_sphere");
+    for slabs in [1, 2, 3] {
+        let report = volume(
+            scene("glass_sphere"),
+            128,
+            4,
+            CausticsVolume {
+                slabs,
+                ..Default::default()
+            },
+        );
+        let img = report.caustics.expect("caustics");
+        assert!(img.all_finite());
+        let m = compare(&img, &reference, None).expect("same size");
+        let c = report.volume.clone().expect("counters");
+        println!(
+            "glass_sphere, {slabs} slab(s): energy error {:+.2} %, RMSE {:.1} lx, FLIP {:.4}, {c:?}",
+            m.energy_error * 100.0,
+            m.rmse,
+            m.flip,
+        );
+        assert!(
+            m.energy_error.abs() < 0.10,
+            "{slabs} slabs: {}",
+            m.energy_error
+        );
+        assert!(c.splatted_lm <= c.entered_lm * (1.0 + 1e-5), "{c:?}");
+    }
+}
+
+fn move_lower_caster(world: &mut bevy::prelude::World, frame: u32) {
+    use bevy::prelude::*;
+    if frame == 4 {
+        let mut q = world.query::<(&Name, &mut Transform)>();
+        for (name, mut t) in q.iter_mut(world) {
+            if name.as_str() == "lower" {
+                t.translation.x += 0.05;
+            }
+        }
+    }
+    if frame == 7 {
+        let mut q = world.query_filtered::<&mut Transform, With<DirectionalLight>>();
+        for mut t in q.iter_mut(world) {
+            t.rotate_x(0.02);
+        }
+    }
+}
+
+/// Section 3.5's differential updates: with a glass slab in slab 1 of 3 and a glass cube in
+/// slab 3, nothing re-runs while nothing changes; moving the cube re-runs slab 3 and the
+/// projectors only (the passes of every frame are counted); turning the light re-runs all.
+#[test]
+fn volume_differential_updates_count_passes() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_vol_{}", std::process::id()));
+    let mut desc = scenes::glass_sphere();
+    desc.name = "two_casters".into();
+    desc.nodes.retain(|n| n.name != "ball");
+    let g = desc.material("glass2", scenes::glass(1.5, 0.2), false);
+    desc.add(
+        "upper",
+        scenes::geometry::cuboid(Vec3::new(1.0, 0.2, 1.0)),
+        g,
+        Vec3::new(0.0, 2.0, 0.0),
+    );
+    desc.add(
+        "lower",
+        scenes::geometry::cuboid(Vec3::splat(0.2)),
+        g,
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+    scenes::gltf::write_gltf(&desc, &dir).unwrap();
+    let report = run(RenderJob {
+        scene: dir.join("two_casters.gltf"),
+        technique: CausticsTechnique::Volume,
+        width: 64,
+        height: 64,
+        frames: 10,
+        per_frame: Some(move_lower_caster),
+        volume: CausticsVolume {
+            slabs: 3,
+            photons: 10_000,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+    .expect("render");
+    let slab = |f: &Vec<String>, k: u32| f.iter().any(|p| p == &format!("caustics/volume/slab{k}"));
+    let project = |f: &Vec<String>| f.iter().any(|p| p == "caustics/volume/project");
+    for (n, f) in report.frame_passes.iter().enumerate() {
+        println!("frame {n}: {f:?}");
+    }
+    let frames = &report.frame_passes;
+    // Frames 1 to 3: the first full run is over and nothing changed.
+    for f in &frames[1..4] {
+        assert!(!project(f) && !(1..=3).any(|k| slab(f, k)), "{f:?}");
+    }
+    // After the caster moved (frame 4) and before the light turns (frame 7).
+    let moved: Vec<_> = frames[4..7].iter().collect();
+    assert!(moved.iter().any(|f| slab(f, 3) && project(f)), "{moved:?}");
+    assert!(
+        moved.iter().all(|f| !slab(f, 1) && !slab(f, 2)),
+        "{moved:?}"
+    );
+    // The light turned: every slab again.
+    let turned: Vec<_> = frames[7..].iter().collect();
+    assert!(
+        turned
+            .iter()
+            .any(|f| slab(f, 1) && slab(f, 2) && slab(f, 3)),
+        "{turned:?}"
+    );
+    assert!(report.caustics.unwrap().all_finite());
+}
+
+fn look_up(world: &mut bevy::prelude::World) {
+    use bevy::prelude::*;
+    let mut q = world.query_filtered::<&mut Transform, With<bevy_caustics::Caustics>>();
+    for mut t in q.iter_mut(world) {
+        t.look_to(Vec3::Y, Vec3::Z);
+    }
+}
+
+/// Section 3.5: with frustum culling on, a volume outside the camera's frustum dispatches
+/// nothing (the camera looks at the sky above `glass_sphere`).
+#[test]
+fn volume_outside_frustum_dispatches_nothing() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        technique: CausticsTechnique::Volume,
+        width: 32,
+        height: 32,
+        frames: 4,
+        hook: Some(look_up),
+        volume: CausticsVolume {
+            frustum_cull: true,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+    .expect("render");
+    println!("passes {:?}", report.passes);
+    assert!(report.passes.is_empty(), "{:?}", report.passes);
+    // The same view with culling off runs the volume.
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        technique: CausticsTechnique::Volume,
+        width: 32,
+        height: 32,
+        frames: 4,
+        hook: Some(look_up),
+        ..Default::default()
+    })
+    .expect("render");
+    assert!(
+        report.passes.iter().any(|p| p == "caustics/volume/slab1"),
+        "{:?}",
+        report.passes
+    );
+}
+
+fn spawn_volume(world: &mut bevy::prelude::World, v: CausticsVolume, at: Vec3) {
+    world.spawn((v, bevy::prelude::Transform::from_translation(at)));
+}
+
+fn graze_entry(world: &mut bevy::prelude::World) {
+    use bevy::prelude::*;
+    // The sun travels almost exactly along the entry face (1e-4 rad into it).
+    let mut q = world.query_filtered::<&mut Transform, With<DirectionalLight>>();
+    for mut t in q.iter_mut(world) {
+        *t = Transform::default().looking_to(Vec3::new(-1e-4, -1.0, 0.0), Vec3::X);
+    }
+    spawn_volume(
+        world,
+        CausticsVolume {
+            size: Vec3::splat(1.2),
+            entry: bevy_caustics::VolumeFace::PosX,
+            exit: vec![
+                bevy_caustics::VolumeFace::NegY,
+                bevy_caustics::VolumeFace::NegX,
+            ],
+            ..Default::default()
+        },
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+}
+
+fn parallel_entry(world: &mut bevy::prelude::World) {
+    spawn_volume(
+        world,
+        CausticsVolume {
+            size: Vec3::splat(1.2),
+            entry: bevy_caustics::VolumeFace::PosX,
+            exit: vec![bevy_caustics::VolumeFace::NegY],
+            ..Default::default()
+        },
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+}
+
+fn slab_boundary(world: &mut bevy::prelude::World) {
+    // glass_slab's glass spans y in [0.9, 1.1]; three slabs of 0.2 m from y = 1.3 put slab
+    // boundaries exactly on its top and bottom faces.
+    spawn_volume(
+        world,
+        CausticsVolume {
+            size: Vec3::new(1.6, 0.6, 1.6),
+            slabs: 3,
+            exit: vec![bevy_caustics::VolumeFace::NegY],
+            ..Default::default()
+        },
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+}
+
+fn empty_volume(world: &mut bevy::prelude::World) {
+    spawn_volume(world, CausticsVolume::default(), Vec3::new(10.0, 5.0, 10.0));
+}
+
+/// Stress: photons exactly parallel to the entry face and 1e-4 rad off it, a caster whose
+/// faces lie on slab boundaries, an empty volume, 1 and 16 slabs (IOR 4.0 and the other stiff
+/// cases run through volumes in `stiff_and_extreme_cases_gpu`): finite caustics, no NaN
+/// guard fired, no energy created, no panic, no validation error (the runner fails on one).
+#[test]
+fn volume_stress_cases() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    type Hook = Option<fn(&mut bevy::prelude::World)>;
+    let cases: [(&str, &str, Hook, u32); 6] = [
+        (
+            "parallel to the entry face",
+            "glass_sphere",
+            Some(parallel_entry),
+            3,
+        ),
+        (
+            "1e-4 rad off the entry face",
+            "glass_sphere",
+            Some(graze_entry),
+            3,
+        ),
+        (
+            "caster on slab boundaries",
+            "glass_slab",
+            Some(slab_boundary),
+            3,
+        ),
+        ("empty volume", "glass_sphere", Some(empty_volume), 3),
+        ("1 slab", "glass_sphere", None, 1),
+        ("16 slabs", "glass_sphere", None, 16),
+    ];
+    for (what, name, hook, slabs) in cases {
+        let report = run(RenderJob {
+            scene: scene(name),
+            technique: CausticsTechnique::Volume,
+            width: 64,
+            height: 64,
+            frames: 4,
+            hook,
+            volume: CausticsVolume {
+                slabs,
+                photons: 20_000,
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let img = report.caustics.expect("caustics");
+        let total: f64 = img.data.iter().map(|p| p.x as f64).sum();
+        println!("{what}: {:?}, image sum {total:.0}", report.volume);
+        assert!(img.all_finite(), "{what}");
+        if let Some(c) = &report.volume {
+            assert_eq!(c.nan_guards, 0, "{what}: {c:?}");
+            assert!(
+                c.splatted_lm <= c.entered_lm * (1.0 + 1e-5),
+                "{what}: {c:?}"
+            );
+        }
+    }
+}

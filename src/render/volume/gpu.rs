@@ -66,7 +66,9 @@ impl VolumeScene {
                         .map_or(Vec3::NAN, |v| inst.world_from_local.transform_point3(*v))
                 });
                 let geo = (p[1] - p[0]).cross(p[2] - p[0]);
-                if !p.iter().all(|v| v.is_finite()) || !(geo.length_squared() > 0.0) {
+                if !p.iter().all(|v| v.is_finite())
+                    || geo.length_squared().partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater)
+                {
                     continue;
                 }
                 let gn = geo.normalize();
@@ -508,7 +510,7 @@ impl VolumeGpu {
         let mut counts = vec![0u8; (COUNT_WORDS * 4) as usize];
         counts[0..4].copy_from_slice(&((live.len() / 4) as u32).to_le_bytes());
         let at = (CNT * 4) as usize;
-        counts[at..at + 4].copy_from_slice(&(entered as f32).to_le_bytes());
+        counts[at..at + 4].copy_from_slice(&entered.to_le_bytes());
         queue.write_buffer(&self.counts, 0, &counts);
         self.entered = entered;
         photons.len() as u32

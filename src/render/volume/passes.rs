@@ -77,6 +77,7 @@ pub const VOLUME_COUNTERS: [(&str, u64); 8] = [
     ("caustics/volume/step_limit", 10),
 ];
 
+#[allow(clippy::too_many_arguments)]
 fn raster_gbuffer(
     ctx: &mut RenderContext,
     pipeline: &bevy::render::render_resource::RenderPipeline,

@@ -58,7 +58,12 @@ pub struct VolumeViewFrame;
 /// Effective slab count (section 3.5's level of detail): beyond `lod_distance` volume
 /// diagonals from the nearest camera, halved for every doubling of the distance.
 pub fn lod_slabs(slabs: u32, lod_distance: f32, diagonal: f32, distance: f32) -> u32 {
-    if !(lod_distance > 0.0) || !(diagonal > 0.0) || !distance.is_finite() {
+    if lod_distance.is_nan()
+        || lod_distance <= 0.0
+        || diagonal.is_nan()
+        || diagonal <= 0.0
+        || !distance.is_finite()
+    {
         return slabs.max(1);
     }
     let ratio = distance / (lod_distance * diagonal);
@@ -122,7 +127,7 @@ pub fn prepare_volumes(
     }
     let lights: Vec<_> = scene.lights.iter().map(|(_, l)| *l).collect();
     let light_sig = debug_hash(&lights);
-    let max_bytes = device.limits().max_storage_buffer_binding_size as u64;
+    let max_bytes = device.limits().max_storage_buffer_binding_size;
     let max_bytes = max_bytes.min(device.limits().max_buffer_size);
     let mut next: Vec<VolumeGpu> = Vec::new();
     let mut old: Vec<VolumeGpu> = std::mem::take(&mut store.volumes);
