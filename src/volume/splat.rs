@@ -38,7 +38,8 @@ pub fn projector_texel_area(
 /// specular event bounds how far a photon's beam can have spread), and it is stretched along
 /// the projected direction by `s = sqrt(min(1 / |cos θ|, max_anisotropy))` and shrunk across
 /// by `1 / s` (area kept). Returns the two semi-axes (world vectors); the splat's irradiance is
-/// `flux / (π |a| |b|)`. Guards: zero or non-finite inputs give a disc of radius `r_min`
+/// `flux / (π |a| |b|)`. Guards: the direction is normalised (zero or non-finite: none);
+/// zero or non-finite inputs give a disc of radius `r_min`
 /// (itself at least 1e-9 m) in the surface plane; a direction along the normal uses any
 /// tangent.
 #[allow(clippy::too_many_arguments)]
@@ -65,11 +66,15 @@ pub fn volume_splat_axes(
     } else {
         r_min
     };
-    let d = if dir.is_finite() { dir } else { Vec3::ZERO };
+    let d = dir.try_normalize().unwrap_or(Vec3::ZERO);
     let proj = d - n * d.dot(n);
-    let (t1, t2) = match proj.try_normalize() {
-        Some(t1) => (t1, n.cross(t1)),
-        None => orthonormal_basis(n),
+    // A direction within 1e-4 rad of the normal has no usable projection (rounding decides
+    // it): the disc is round there anyway, take the normal's basis.
+    let (t1, t2) = if proj.length() > 1e-4 {
+        let t1 = proj.normalize();
+        (t1, n.cross(t1).normalize())
+    } else {
+        orthonormal_basis(n)
     };
     let cos = d.dot(n).abs();
     let max_a = if max_anisotropy.is_finite() {
@@ -78,7 +83,7 @@ pub fn volume_splat_axes(
         1.0
     };
     let stretch = if cos > 0.0 {
-        (1.0 / cos).min(max_a)
+        (1.0 / cos).clamp(1.0, max_a)
     } else {
         max_a
     };

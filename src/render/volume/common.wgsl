@@ -137,17 +137,18 @@ fn vol_splat_axes(dir: vec3<f32>, normal: vec3<f32>, area_per_photon: f32, overl
     if want <= 3.0e38 {
         r = clamp(want, r_min, cap);
     }
-    var d = dir;
-    if !vol_finite3(d) {
-        d = vec3(0.0);
+    var d = vec3(0.0);
+    let dl = length(dir);
+    if vol_finite3(dir) && dl > 0.0 && dl <= 3.0e38 {
+        d = dir / dl;
     }
     let proj = d - n * dot(d, n);
     let pl = length(proj);
     var t1: vec3<f32>;
     var t2: vec3<f32>;
-    if pl > 0.0 && pl <= 3.0e38 {
+    if pl > 1e-4 && pl <= 3.0e38 {
         t1 = proj / pl;
-        t2 = cross(n, t1);
+        t2 = normalize(cross(n, t1));
     } else {
         let b = optics_orthonormal_basis(n);
         t1 = b[0];
@@ -160,7 +161,7 @@ fn vol_splat_axes(dir: vec3<f32>, normal: vec3<f32>, area_per_photon: f32, overl
     }
     var stretch = max_a;
     if c > 0.0 {
-        stretch = min(1.0 / c, max_a);
+        stretch = clamp(1.0 / c, 1.0, max_a);
     }
     let s = sqrt(stretch);
     return mat2x3<f32>(t1 * (r * s), t2 * (r / s));
