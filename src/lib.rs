@@ -109,7 +109,8 @@ impl Plugin for CausticsPlugin {
             )
             .init_resource::<render::CausticsDispatchLog>();
         components::validate::plugin(app);
-        app.add_plugins(scene::ScenePlugin);
+        app.add_plugins(scene::ScenePlugin)
+            .add_systems(Update, volume::volumes_from_gltf);
     }
 
     fn finish(&self, app: &mut App) {

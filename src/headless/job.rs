@@ -281,15 +281,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
             job.volume.clone(),
         ))
         .init_resource::<super::volume::VolumesFitted>()
-        .add_systems(
-            Update,
-            (
-                drive,
-                super::volume::volumes_from_gltf,
-                super::volume::fit_volumes,
-            )
-                .chain(),
-        );
+        .add_systems(Update, (drive, super::volume::fit_volumes).chain());
     if job.mark_lights {
         app.add_systems(Update, mark_lights);
     }

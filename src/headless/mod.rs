@@ -7,5 +7,6 @@
 mod job;
 mod volume;
 
+pub use crate::volume::volume_from_extras;
 pub use job::*;
-pub use volume::{VolumeCounters, volume_from_extras};
+pub use volume::VolumeCounters;

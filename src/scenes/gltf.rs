@@ -133,6 +133,12 @@ pub fn write_gltf(scene: &SceneDesc, dir: &Path) -> std::io::Result<()> {
             "extensions": {"KHR_lights_punctual": {"light": lights.len() - 1}}}),
         );
     }
+    for v in &scene.volumes {
+        nodes.push(
+            json!({"name": v.name, "translation": v.translation.to_array(),
+            "extras": {"caustics_volume": v.extras}}),
+        );
+    }
     nodes.push(
         json!({"name": "camera", "camera": 0, "translation": scene.camera.translation.to_array(),
         "rotation": scene.camera.rotation.to_array()}),

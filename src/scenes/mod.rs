@@ -2,6 +2,7 @@
 //! (`assets/scenes/*.gltf`) and turned straight into a traceable scene by the CPU tests, so the
 //! analytic checks and the glTF the renderer loads come from one description.
 
+pub mod cornell;
 pub mod geometry;
 pub mod gltf;
 pub mod stiff;
@@ -108,6 +109,19 @@ pub struct SceneDesc {
     pub lights: Vec<LightDesc>,
     /// The camera.
     pub camera: CameraDesc,
+    /// Caustics volumes declared on empty nodes through glTF `extras`.
+    pub volumes: Vec<VolumeNode>,
+}
+
+/// A node that declares a caustics volume (`{"caustics_volume": {...}}` in its extras).
+#[derive(Clone, Debug)]
+pub struct VolumeNode {
+    /// Node name.
+    pub name: String,
+    /// Centre of the volume, metres.
+    pub translation: Vec3,
+    /// The `caustics_volume` object (README, "Caustics volumes").
+    pub extras: serde_json::Value,
 }
 
 /// A camera at `eye` looking at `target` with +Y up.
@@ -130,6 +144,7 @@ impl SceneDesc {
             nodes: vec![],
             lights: vec![],
             camera,
+            volumes: vec![],
         }
     }
 
@@ -466,5 +481,9 @@ pub fn all() -> Vec<SceneDesc> {
         pool(),
         ring(),
         empty(),
+        cornell::cornell_diamond(),
+        cornell::cornell_ring(),
+        cornell::cornell_ball(),
+        cornell::cornell_blocks(),
     ]
 }

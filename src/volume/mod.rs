@@ -3,10 +3,12 @@
 //! frame, slab probes and projectors ([`VolumeFrame`]), and the splat footprint. The GPU passes
 //! are in `crate::render::volume`.
 
+mod extras;
 mod frame;
 mod seed;
 mod splat;
 
+pub use extras::*;
 pub use frame::*;
 pub use seed::*;
 pub use splat::*;

@@ -385,3 +385,43 @@ fn volume_stress_cases() {
         }
     }
 }
+
+/// The seed's Cornell-box scenes (`assets/scenes/cornell_*`) render with the volume their glTF
+/// `extras` declare (its exit faces leave out the top: no `PosY` projector runs, where a fitted
+/// volume would have one): light enters, caustics are finite, no energy is created.
+#[test]
+fn volume_cornell_scenes_use_their_gltf_volumes() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    for name in [
+        "cornell_diamond",
+        "cornell_ring",
+        "cornell_ball",
+        "cornell_blocks",
+    ] {
+        let report = volume(scene(name), 48, 4, CausticsVolume::default());
+        let c = report.volume.clone().expect("counters");
+        println!("{name}: {c:?}");
+        assert!(report.caustics.unwrap().all_finite(), "{name}");
+        assert!(
+            report
+                .passes
+                .iter()
+                .any(|p| p == "caustics/volume/projector3_gbuffer")
+                && !report
+                    .passes
+                    .iter()
+                    .any(|p| p == "caustics/volume/projector2_gbuffer"),
+            "{name}: {:?}",
+            report.passes
+        );
+        assert!(c.entered_lm > 0.0 && c.hits > 0, "{name}: {c:?}");
+        assert!(
+            c.splatted_lm <= c.entered_lm * (1.0 + 1e-5),
+            "{name}: {c:?}"
+        );
+        assert_eq!(c.nan_guards, 0, "{name}");
+    }
+}
