@@ -167,16 +167,24 @@ pub fn prepare_volumes(
         gpu.exit_mask = exit_mask(volume);
         gpu.visible =
             !volume.frustum_cull || cams.iter().any(|(_, clip, _)| !frame.outside_frustum(clip));
+        let volume_sig = debug_hash(&(
+            frame,
+            gpu.exit_mask,
+            volume.photons,
+            volume.splat_overlap.to_bits(),
+            volume.entry,
+        ));
+        // The per-slab hashes walk every instance: only when the scene or the volume changed.
+        let slab_sigs = if volume_sig == gpu.sig.volume && scene.generation == gpu.sig.generation
+        {
+            gpu.sig.slabs.clone()
+        } else {
+            slab_signatures(&frame, scene)
+        };
         let sig = Signatures {
-            volume: debug_hash(&(
-                frame,
-                gpu.exit_mask,
-                volume.photons,
-                volume.splat_overlap.to_bits(),
-                volume.entry,
-            )),
+            volume: volume_sig,
             lights: light_sig,
-            slabs: slab_signatures(&frame, scene),
+            slabs: slab_sigs,
             generation: scene.generation,
         };
         let first_change = if sig.volume != gpu.sig.volume
