@@ -175,8 +175,7 @@ pub fn prepare_volumes(
             volume.entry,
         ));
         // The per-slab hashes walk every instance: only when the scene or the volume changed.
-        let slab_sigs = if volume_sig == gpu.sig.volume && scene.generation == gpu.sig.generation
-        {
+        let slab_sigs = if volume_sig == gpu.sig.volume && scene.generation == gpu.sig.generation {
             gpu.sig.slabs.clone()
         } else {
             slab_signatures(&frame, scene)
