@@ -23,6 +23,45 @@ fn scene(name: &str) -> PathBuf {
         .join(format!("{name}.gltf"))
 }
 
+/// A closed-form case: scene, receiver plane (n, d with n . p = d), region on it, expected
+/// mean caustic irradiance (lux).
+type ClosedForm = (
+    bevy_caustics::scenes::SceneDesc,
+    glam::Vec3,
+    f32,
+    fn(glam::Vec3) -> bool,
+    f32,
+);
+
+/// `mirror_wall` (a 0.9 Schlick mirror lighting the wall) and `glass_slab` (IOR 1.5, the
+/// floor under the slab, Fresnel in and out): the closed forms the GPU techniques are held to.
+fn closed_form_cases() -> [ClosedForm; 2] {
+    use bevy_caustics::optics::{fresnel_dielectric, fresnel_schlick};
+    use bevy_caustics::scenes;
+    use glam::Vec3;
+    let a = scenes::MIRROR_WALL_INCIDENCE;
+    let mirror = scenes::SUN_LUX * fresnel_schlick(a.cos(), Vec3::splat(0.9)).x * a.sin();
+    let b = scenes::GLASS_SLAB_INCIDENCE;
+    let r = fresnel_dielectric(b.cos(), 1.0 / 1.5);
+    let slab = scenes::SUN_LUX * b.cos() * (1.0 - r) / (1.0 + r);
+    [
+        (
+            scenes::mirror_wall(),
+            Vec3::NEG_X,
+            -3.0,
+            |p| (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25,
+            mirror,
+        ),
+        (
+            scenes::glass_slab(),
+            Vec3::Y,
+            0.0,
+            |p| (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3,
+            slab,
+        ),
+    ]
+}
+
 fn require_gpu() -> bool {
     match find_adapter() {
         Ok(name) => {

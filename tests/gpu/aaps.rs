@@ -6,7 +6,7 @@ use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
 use bevy_caustics::{AapsSettings, CausticsTechnique, scenes};
 use glam::Vec3;
 
-use super::{GPU, require_gpu, scene};
+use super::{GPU, closed_form_cases, require_gpu, scene};
 
 /// Frames before the caustics buffer is read: the task buffer starts uniform and adapts every
 /// frame; after 8 frames the photon count changes by < 1 % per frame on these scenes.
@@ -40,30 +40,7 @@ fn aaps_closed_forms() {
     if !require_gpu() {
         return;
     }
-    use bevy_caustics::optics::{fresnel_dielectric, fresnel_schlick};
-    let a = scenes::MIRROR_WALL_INCIDENCE;
-    let mirror = scenes::SUN_LUX * fresnel_schlick(a.cos(), Vec3::splat(0.9)).x * a.sin();
-    let b = scenes::GLASS_SLAB_INCIDENCE;
-    let r = fresnel_dielectric(b.cos(), 1.0 / 1.5);
-    let slab = scenes::SUN_LUX * b.cos() * (1.0 - r) / (1.0 + r);
-    type Region = fn(Vec3) -> bool;
-    let cases: [(scenes::SceneDesc, Vec3, f32, Region, f32); 2] = [
-        (
-            scenes::mirror_wall(),
-            Vec3::NEG_X,
-            -3.0,
-            |p| (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25,
-            mirror,
-        ),
-        (
-            scenes::glass_slab(),
-            Vec3::Y,
-            0.0,
-            |p| (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3,
-            slab,
-        ),
-    ];
-    for (desc, n, d, region, expect) in cases {
+    for (desc, n, d, region, expect) in closed_form_cases() {
         let report = aaps(&desc.name, 128, None, AapsSettings::default());
         let img = report.caustics.expect("caustics");
         assert!(img.all_finite());

@@ -6,7 +6,7 @@ use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
 use bevy_caustics::{CausticsTechnique, CausticsVolume, scenes};
 use glam::Vec3;
 
-use super::{GPU, require_gpu, scene};
+use super::{GPU, closed_form_cases, require_gpu, scene};
 
 fn volume(
     path: std::path::PathBuf,
@@ -41,30 +41,7 @@ fn volume_closed_forms_and_energy() {
     if !require_gpu() {
         return;
     }
-    use bevy_caustics::optics::{fresnel_dielectric, fresnel_schlick};
-    let a = scenes::MIRROR_WALL_INCIDENCE;
-    let mirror = scenes::SUN_LUX * fresnel_schlick(a.cos(), Vec3::splat(0.9)).x * a.sin();
-    let b = scenes::GLASS_SLAB_INCIDENCE;
-    let r = fresnel_dielectric(b.cos(), 1.0 / 1.5);
-    let slab = scenes::SUN_LUX * b.cos() * (1.0 - r) / (1.0 + r);
-    type Region = fn(Vec3) -> bool;
-    let cases: [(scenes::SceneDesc, Vec3, f32, Region, f32); 2] = [
-        (
-            scenes::mirror_wall(),
-            Vec3::NEG_X,
-            -3.0,
-            |p| (2.75..3.25).contains(&p.y) && p.z.abs() < 0.25,
-            mirror,
-        ),
-        (
-            scenes::glass_slab(),
-            Vec3::Y,
-            0.0,
-            |p| (0.4..0.8).contains(&p.x) && p.z.abs() < 0.3,
-            slab,
-        ),
-    ];
-    for (desc, n, d, region, expect) in cases {
+    for (desc, n, d, region, expect) in closed_form_cases() {
         let report = volume(scene(&desc.name), 128, 4, CausticsVolume::default());
         let img = report.caustics.expect("caustics");
         assert!(img.all_finite());
@@ -275,28 +252,27 @@ fn graze_entry(world: &mut bevy::prelude::World) {
     for mut t in q.iter_mut(world) {
         *t = Transform::default().looking_to(Vec3::new(-1e-4, -1.0, 0.0), Vec3::X);
     }
-    spawn_volume(
+    side_entry_volume(
         world,
-        CausticsVolume {
-            size: Vec3::splat(1.2),
-            entry: bevy_caustics::VolumeFace::PosX,
-            exit: vec![
-                bevy_caustics::VolumeFace::NegY,
-                bevy_caustics::VolumeFace::NegX,
-            ],
-            ..Default::default()
-        },
-        Vec3::new(0.0, 1.0, 0.0),
+        vec![
+            bevy_caustics::VolumeFace::NegY,
+            bevy_caustics::VolumeFace::NegX,
+        ],
     );
 }
 
 fn parallel_entry(world: &mut bevy::prelude::World) {
+    side_entry_volume(world, vec![bevy_caustics::VolumeFace::NegY]);
+}
+
+/// A 1.2 m volume around `glass_sphere`'s ball whose entry face is +X (the sun travels down).
+fn side_entry_volume(world: &mut bevy::prelude::World, exit: Vec<bevy_caustics::VolumeFace>) {
     spawn_volume(
         world,
         CausticsVolume {
             size: Vec3::splat(1.2),
             entry: bevy_caustics::VolumeFace::PosX,
-            exit: vec![bevy_caustics::VolumeFace::NegY],
+            exit,
             ..Default::default()
         },
         Vec3::new(0.0, 1.0, 0.0),

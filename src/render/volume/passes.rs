@@ -13,6 +13,7 @@ use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
     BindGroupEntries, BindGroupEntry, ComputePassDescriptor, LoadOp, Operations, PipelineCache,
     RenderPassColorAttachment, RenderPassDepthStencilAttachment, RenderPassDescriptor, StoreOp,
+    TextureView,
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
@@ -77,13 +78,41 @@ pub const VOLUME_COUNTERS: [(&str, u64); 8] = [
     ("caustics/volume/step_limit", 10),
 ];
 
+/// A colour attachment cleared to zero and stored.
+fn cleared(view: &TextureView) -> Option<RenderPassColorAttachment<'_>> {
+    Some(RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: Operations {
+            load: LoadOp::Clear(Default::default()),
+            store: StoreOp::Store,
+        },
+    })
+}
+
+/// A render pass with colour targets only.
+fn colour_pass<'a>(
+    label: &'static str,
+    color_attachments: &'a [Option<RenderPassColorAttachment<'a>>],
+) -> RenderPassDescriptor<'a> {
+    RenderPassDescriptor {
+        label: Some(label),
+        color_attachments,
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn raster_gbuffer(
     ctx: &mut RenderContext,
     pipeline: &bevy::render::render_resource::RenderPipeline,
     group: &bevy::render::render_resource::BindGroup,
-    color: &bevy::render::render_resource::TextureView,
-    depth: &bevy::render::render_resource::TextureView,
+    color: &TextureView,
+    depth: &TextureView,
     far: bool,
     probe: u32,
     tri_count: u32,
@@ -93,15 +122,7 @@ fn raster_gbuffer(
     let diagnostics = diagnostics.as_deref();
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
         label: Some("caustics_volume_gbuffer"),
-        color_attachments: &[Some(RenderPassColorAttachment {
-            view: color,
-            depth_slice: None,
-            resolve_target: None,
-            ops: Operations {
-                load: LoadOp::Clear(Default::default()),
-                store: StoreOp::Store,
-            },
-        })],
+        color_attachments: &[cleared(color)],
         depth_stencil_attachment: Some(RenderPassDepthStencilAttachment {
             view: depth,
             depth_ops: Some(Operations {
@@ -364,22 +385,10 @@ pub fn volume_passes(
             .collect();
         let diagnostics = ctx.diagnostic_recorder();
         let diagnostics = diagnostics.as_deref();
-        let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
-            label: Some("caustics_volume_splat"),
-            color_attachments: &[Some(RenderPassColorAttachment {
-                view: &state.target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: Operations {
-                    load: LoadOp::Clear(Default::default()),
-                    store: StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = ctx.begin_tracked_render_pass(colour_pass(
+            "caustics_volume_splat",
+            &[cleared(&state.target)],
+        ));
         let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
         pass.set_render_pipeline(splat);
         for (group, capacity) in &groups {
@@ -402,22 +411,10 @@ pub fn volume_passes(
         );
         let diagnostics = ctx.diagnostic_recorder();
         let diagnostics = diagnostics.as_deref();
-        let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
-            label: Some("caustics_volume_blur"),
-            color_attachments: &[Some(RenderPassColorAttachment {
-                view: &buffer.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: Operations {
-                    load: LoadOp::Clear(Default::default()),
-                    store: StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = ctx.begin_tracked_render_pass(colour_pass(
+            "caustics_volume_blur",
+            &[cleared(&buffer.view)],
+        ));
         let span = diagnostics.pass_span(&mut pass, BLUR_PASS);
         pass.set_render_pipeline(blur);
         pass.set_bind_group(0, &group, &[]);
