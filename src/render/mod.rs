@@ -117,6 +117,29 @@ pub struct ViewCausticsBuffer {
     pub uploaded: u64,
 }
 
+/// A view-sized `Rgba32Float` texture (the caustics buffer, the volumes' splat target).
+pub(crate) fn view_texture(
+    device: &RenderDevice,
+    label: &'static str,
+    size: UVec2,
+    usage: TextureUsages,
+) -> bevy::render::render_resource::Texture {
+    device.create_texture(&TextureDescriptor {
+        label: Some(label),
+        size: Extent3d {
+            width: size.x,
+            height: size.y,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: TextureDimension::D2,
+        format: CAUSTICS_BUFFER_FORMAT,
+        usage,
+        view_formats: &[],
+    })
+}
+
 /// Create (or resize) each caustics view's buffer and upload a new reference image.
 pub(crate) fn prepare_caustics_buffers(
     mut commands: Commands,
@@ -140,24 +163,16 @@ pub(crate) fn prepare_caustics_buffers(
         let buffer = match buffer {
             Some(b) if b.size == size => b.into_inner(),
             _ => {
-                let texture = device.create_texture(&TextureDescriptor {
-                    label: Some("caustics_buffer"),
-                    size: Extent3d {
-                        width: size.x,
-                        height: size.y,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: TextureDimension::D2,
-                    format: CAUSTICS_BUFFER_FORMAT,
-                    usage: TextureUsages::TEXTURE_BINDING
+                let texture = view_texture(
+                    &device,
+                    "caustics_buffer",
+                    size,
+                    TextureUsages::TEXTURE_BINDING
                         | TextureUsages::STORAGE_BINDING
                         | TextureUsages::RENDER_ATTACHMENT
                         | TextureUsages::COPY_DST
                         | TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                });
+                );
                 let view = texture.create_view(&TextureViewDescriptor::default());
                 new_buffer = Some(ViewCausticsBuffer {
                     texture,

@@ -207,33 +207,27 @@ fn volume_outside_frustum_dispatches_nothing() {
     if !require_gpu() {
         return;
     }
-    let report = run(RenderJob {
-        scene: scene("glass_sphere"),
-        technique: CausticsTechnique::Volume,
-        width: 32,
-        height: 32,
-        frames: 4,
-        hook: Some(look_up),
-        volume: CausticsVolume {
-            frustum_cull: true,
+    let looking_up = |frustum_cull: bool| {
+        run(RenderJob {
+            scene: scene("glass_sphere"),
+            technique: CausticsTechnique::Volume,
+            width: 32,
+            height: 32,
+            frames: 4,
+            hook: Some(look_up),
+            volume: CausticsVolume {
+                frustum_cull,
+                ..Default::default()
+            },
             ..Default::default()
-        },
-        ..Default::default()
-    })
-    .expect("render");
+        })
+        .expect("render")
+    };
+    let report = looking_up(true);
     println!("passes {:?}", report.passes);
     assert!(report.passes.is_empty(), "{:?}", report.passes);
     // The same view with culling off runs the volume.
-    let report = run(RenderJob {
-        scene: scene("glass_sphere"),
-        technique: CausticsTechnique::Volume,
-        width: 32,
-        height: 32,
-        frames: 4,
-        hook: Some(look_up),
-        ..Default::default()
-    })
-    .expect("render");
+    let report = looking_up(false);
     assert!(
         report.passes.iter().any(|p| p == "caustics/volume/slab1"),
         "{:?}",

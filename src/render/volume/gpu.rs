@@ -46,6 +46,10 @@ pub struct VolumeScene {
     pub bounds: (Vec3, Vec3),
     /// Largest extent of the scene, metres.
     pub scale: f32,
+    /// The caustic lights.
+    pub lights: Vec<crate::scene::TraceLight>,
+    /// Their signature (a light change re-runs every slab).
+    pub light_sig: u64,
 }
 
 impl VolumeScene {
@@ -115,6 +119,8 @@ impl VolumeScene {
             tri_count,
             bounds: (lo, hi),
             scale: (hi - lo).max_element().max(1e-3),
+            lights: scene.lights.iter().map(|(_, l)| *l).collect(),
+            light_sig: debug_hash(&scene.lights.iter().map(|(_, l)| *l).collect::<Vec<_>>()),
         }
     }
 }
@@ -200,8 +206,6 @@ pub struct VolumeGpu {
     pub ran: AtomicBool,
     /// In some caustics camera's frustum (or culling off).
     pub visible: bool,
-    /// Luminous flux seeded, lm.
-    pub entered: f32,
 }
 
 fn storage(device: &RenderDevice, label: &'static str, size: u64, extra: BufferUsages) -> Buffer {
@@ -363,7 +367,6 @@ impl VolumeGpu {
             pending: Some(0),
             ran: AtomicBool::new(false),
             visible: false,
-            entered: 0.0,
         }
     }
 
@@ -512,7 +515,6 @@ impl VolumeGpu {
         let at = (CNT * 4) as usize;
         counts[at..at + 4].copy_from_slice(&entered.to_le_bytes());
         queue.write_buffer(&self.counts, 0, &counts);
-        self.entered = entered;
         photons.len() as u32
     }
 }

@@ -78,6 +78,17 @@ pub const VOLUME_COUNTERS: [(&str, u64); 8] = [
     ("caustics/volume/step_limit", 10),
 ];
 
+/// One `VolStep` of the probe uniforms (selected by a dynamic offset).
+fn probe_binding(v: &VolumeGpu) -> bevy::render::render_resource::BindingResource<'_> {
+    bevy::render::render_resource::BindingResource::Buffer(
+        bevy::render::render_resource::BufferBinding {
+            buffer: &v.probes,
+            offset: 0,
+            size: core::num::NonZeroU64::new(96),
+        },
+    )
+}
+
 /// A colour attachment cleared to zero and stored.
 fn cleared(view: &TextureView) -> Option<RenderPassColorAttachment<'_>> {
     Some(RenderPassColorAttachment {
@@ -174,13 +185,7 @@ fn update_volume(
         &cache.get_bind_group_layout(&pipelines.compute_layout),
         &BindGroupEntries::sequential((
             v.params.as_entire_binding(),
-            bevy::render::render_resource::BindingResource::Buffer(
-                bevy::render::render_resource::BufferBinding {
-                    buffer: &v.probes,
-                    offset: 0,
-                    size: Some(core::num::NonZeroU64::new(96).unwrap()),
-                },
-            ),
+            probe_binding(v),
             scene.materials.as_entire_binding(),
             v.states.as_entire_binding(),
             v.live.as_entire_binding(),
@@ -205,16 +210,7 @@ fn update_volume(
         &cache.get_bind_group_layout(&pipelines.gbuffer_layout),
         &BindGroupEntries::with_indices((
             (0, v.params.as_entire_binding()),
-            (
-                1,
-                bevy::render::render_resource::BindingResource::Buffer(
-                    bevy::render::render_resource::BufferBinding {
-                        buffer: &v.probes,
-                        offset: 0,
-                        size: Some(core::num::NonZeroU64::new(96).unwrap()),
-                    },
-                ),
-            ),
+            (1, probe_binding(v)),
             (2, scene.tris.as_entire_binding()),
         )),
     );

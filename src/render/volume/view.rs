@@ -6,8 +6,7 @@ use std::sync::atomic::Ordering;
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::render_resource::{
-    Buffer, BufferDescriptor, BufferUsages, Extent3d, TextureDescriptor, TextureDimension,
-    TextureUsages, TextureView, TextureViewDescriptor,
+    Buffer, BufferDescriptor, BufferUsages, TextureUsages, TextureView, TextureViewDescriptor,
 };
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::view::ExtractedView;
@@ -17,8 +16,8 @@ use super::gpu::{
     Signatures, VolumeGpu, VolumeKey, VolumeScene, debug_hash, exit_mask, slab_signatures,
 };
 use crate::components::{CausticsTechnique, CausticsVolume};
+use crate::render::ExtractedCaustics;
 use crate::render::aaps::scene::ExtractedCausticsScene;
-use crate::render::{CAUSTICS_BUFFER_FORMAT, ExtractedCaustics};
 use crate::volume::VolumeFrame;
 
 /// The main world's volumes (entity, settings, world from volume).
@@ -106,7 +105,8 @@ pub fn prepare_volumes(
             (e, clip, view.world_from_view.translation())
         })
         .collect();
-    let volumes = extracted.map(|e| e.0.clone()).unwrap_or_default();
+    let volumes: &[(Entity, CausticsVolume, Affine3A)] =
+        extracted.as_deref().map_or(&[], |e| e.0.as_slice());
     let scene = scene.filter(|s| !cams.is_empty() && s.0.is_active() && !s.0.lights.is_empty());
     let Some(scene) = scene else {
         store.volumes.clear();
@@ -125,14 +125,12 @@ pub fn prepare_volumes(
     if store.scene.as_ref().map(|s| s.generation) != Some(scene.generation) {
         store.scene = Some(VolumeScene::build(&device, scene));
     }
-    let lights: Vec<_> = scene.lights.iter().map(|(_, l)| *l).collect();
-    let light_sig = debug_hash(&lights);
     let max_bytes = device.limits().max_storage_buffer_binding_size;
     let max_bytes = max_bytes.min(device.limits().max_buffer_size);
     let mut next: Vec<VolumeGpu> = Vec::new();
     let mut old: Vec<VolumeGpu> = std::mem::take(&mut store.volumes);
     let vs = store.scene.as_ref().unwrap();
-    for (entity, volume, affine) in &volumes {
+    for (entity, volume, affine) in volumes {
         if volume.photons <= 0 {
             continue;
         }
@@ -182,7 +180,7 @@ pub fn prepare_volumes(
         };
         let sig = Signatures {
             volume: volume_sig,
-            lights: light_sig,
+            lights: vs.light_sig,
             slabs: slab_sigs,
             generation: scene.generation,
         };
@@ -200,7 +198,7 @@ pub fn prepare_volumes(
         };
         if first_change == Some(0) && (sig.volume != gpu.sig.volume || sig.lights != gpu.sig.lights)
         {
-            let seeded = gpu.seed(&queue, affine, volume, &lights);
+            let seeded = gpu.seed(&queue, affine, volume, &vs.lights);
             gpu.write_uniforms(&queue, vs, volume, seeded);
         } else if first_change.is_some() {
             gpu.write_uniforms(&queue, vs, volume, 0);
@@ -276,22 +274,13 @@ pub fn prepare_volumes(
 }
 
 fn new_view_state(device: &RenderDevice, size: UVec2) -> VolumeViewState {
-    let target = device
-        .create_texture(&TextureDescriptor {
-            label: Some("caustics:texture:volume_splats"),
-            size: Extent3d {
-                width: size.x,
-                height: size.y,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: TextureDimension::D2,
-            format: CAUSTICS_BUFFER_FORMAT,
-            usage: TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-        .create_view(&TextureViewDescriptor::default());
+    let target = crate::render::view_texture(
+        device,
+        "caustics:texture:volume_splats",
+        size,
+        TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING,
+    )
+    .create_view(&TextureViewDescriptor::default());
     let uniform = |label: &'static str, size: u64| {
         device.create_buffer(&BufferDescriptor {
             label: Some(label),
