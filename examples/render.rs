@@ -129,6 +129,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                         "lod_distance" => a.lod_distance = f()?,
                         "differential" => a.differential = f()? != 0.0,
                         "frustum_cull" => a.frustum_cull = f()? != 0.0,
+                        "progressive" => a.progressive = f()?.max(0.0) as u32,
                         _ => return Err(format!("--volume: unknown field '{k}'")),
                     }
                 }

@@ -36,7 +36,7 @@ use bevy::render::renderer::{RenderAdapter, RenderDevice};
 pub use components::validate::CausticsWarnings;
 pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
-    CausticsTechnique, CausticsVolume, VolumeFace,
+    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace,
 };
 pub use render::CausticsDispatchLog;
 
@@ -44,7 +44,7 @@ pub use render::CausticsDispatchLog;
 pub mod prelude {
     pub use crate::{
         AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
-        CausticsQuality, CausticsTechnique, CausticsVolume, VolumeFace,
+        CausticsQuality, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace,
     };
 }
 
@@ -97,6 +97,7 @@ impl Plugin for CausticsPlugin {
             .register_type::<CausticLight>()
             .register_type::<CausticMaterial>()
             .register_type::<CausticsVolume>()
+            .register_type::<CausticsVolumeGizmos>()
             .configure_sets(
                 PostUpdate,
                 (

@@ -811,3 +811,5 @@ mod aaps;
 
 #[path = "cpu/volume.rs"]
 mod volume;
+#[path = "cpu/volume_modes.rs"]
+mod volume_modes;

@@ -16,6 +16,8 @@ mod aaps;
 mod twins;
 #[path = "gpu/volume.rs"]
 mod volume;
+#[path = "gpu/volume_modes.rs"]
+mod volume_modes;
 
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,4 +1,5 @@
 use bevy::prelude::*;
+use bevy::render::extract_component::ExtractComponent;
 
 /// A caustics volume: an oriented box (its `Transform` places, rotates and scales the unit box
 /// times [`CausticsVolume::size`]) inside which caustics are computed by slab propagation
@@ -54,6 +55,13 @@ pub struct CausticsVolume {
     /// in view, `mirror_wall`), and the paper's rule would drop them. Turn it on for volumes
     /// whose receivers are inside them or next to them.
     pub frustum_cull: bool,
+    /// Progressive mode (section 3.5): photons traced per frame, the pool (`photons`) being
+    /// the maximum; each frame's batch accumulates with the earlier ones (flux scaled by
+    /// photons / traced, so every frame is an estimate of the full result) until the whole
+    /// pool is traced, then nothing runs until something changes. A change inside the volume
+    /// restarts the accumulation from the first slab. Default 0 (off: the whole pool per
+    /// update); a value at least `photons` is the same as off. Cost per frame: linear in it.
+    pub progressive: u32,
 }
 
 impl Default for CausticsVolume {
@@ -73,6 +81,7 @@ impl Default for CausticsVolume {
             lod_distance: 8.0,
             differential: true,
             frustum_cull: false,
+            progressive: 0,
         }
     }
 }
@@ -165,6 +174,65 @@ impl VolumeFace {
             Self::NegY => Vec3::NEG_Y,
             Self::PosZ => Vec3::Z,
             Self::NegZ => Vec3::NEG_Z,
+        }
+    }
+}
+
+/// Draws every [`CausticsVolume`] into this camera's image as lines (a debug view): the entry
+/// face with a cross, exit faces, culling faces and the planes between slabs, each in its own
+/// colour (the lines of [`crate::volume::volume_gizmo_segments`]). Put it on a camera with
+/// [`crate::Caustics`]. The lines are drawn after tone mapping, so the colours appear as
+/// given, whatever the exposure. Without this component, or without a volume, nothing is
+/// drawn and no pass runs.
+///
+/// Cost: one line-list draw per camera, 8 to 14 lines per face set plus 4 per slab plane.
+#[derive(Component, Reflect, Clone, Debug, PartialEq, ExtractComponent)]
+#[reflect(Component, Default, Clone)]
+#[extract_component_filter(With<Camera>)]
+#[extract_component_sync_target((Self, crate::render::volume::gizmo::VolumeGizmoView))]
+pub struct CausticsVolumeGizmos {
+    /// Entry face. Default yellow (1, 1, 0).
+    pub entry: Color,
+    /// Exit faces. Default green (0, 1, 0).
+    pub exit: Color,
+    /// Culling faces. Default red (1, 0, 0).
+    pub culling: Color,
+    /// Planes between slabs. Default cyan (0, 1, 1).
+    pub slab_planes: Color,
+    /// Draw the planes between slabs. Default on.
+    pub show_slab_planes: bool,
+    /// Hide lines behind the scene's geometry (against the depth prepass, 0.5 % of the
+    /// distance as margin). Default on.
+    pub depth_test: bool,
+    /// Face outlines are inset towards the face centre by this fraction of the face's
+    /// extents, so neighbouring faces stay apart. Default 0.02. Range [0, 0.45] (clamped
+    /// where used).
+    pub inset: f32,
+}
+
+impl Default for CausticsVolumeGizmos {
+    fn default() -> Self {
+        Self {
+            entry: Color::srgb(1.0, 1.0, 0.0),
+            exit: Color::srgb(0.0, 1.0, 0.0),
+            culling: Color::srgb(1.0, 0.0, 0.0),
+            slab_planes: Color::srgb(0.0, 1.0, 1.0),
+            show_slab_planes: true,
+            depth_test: true,
+            inset: 0.02,
+        }
+    }
+}
+
+impl CausticsVolumeGizmos {
+    /// The colour of a line of `kind`.
+    pub fn colour(&self, kind: crate::volume::VolumeGizmoKind) -> Color {
+        use crate::volume::VolumeGizmoKind as K;
+        match kind {
+            K::Entry => self.entry,
+            K::Exit => self.exit,
+            K::Culling => self.culling,
+            K::SlabPlane => self.slab_planes,
         }
     }
 }

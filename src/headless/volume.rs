@@ -23,6 +23,7 @@ pub(crate) fn apply_template(v: &mut CausticsVolume, t: &CausticsVolume) {
     v.lod_distance = t.lod_distance;
     v.differential = t.differential;
     v.frustum_cull = t.frustum_cull;
+    v.progressive = t.progressive;
 }
 
 /// Fit one volume per caustic light around the casters (their world box), entry face towards

@@ -46,6 +46,9 @@ pub fn volume_from_extras(json: &str) -> Option<CausticsVolume> {
     if let Some(x) = u("gbuffer_resolution") {
         vol.gbuffer_resolution = x.min(u32::MAX as u64) as u32;
     }
+    if let Some(x) = u("progressive") {
+        vol.progressive = x.min(u32::MAX as u64) as u32;
+    }
     if let Some(f) = o.get("entry").and_then(face) {
         vol.entry = f;
     }

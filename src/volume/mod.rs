@@ -5,10 +5,14 @@
 
 mod extras;
 mod frame;
+mod gizmo;
+mod progressive;
 mod seed;
 mod splat;
 
 pub use extras::*;
 pub use frame::*;
+pub use gizmo::*;
+pub use progressive::*;
 pub use seed::*;
 pub use splat::*;

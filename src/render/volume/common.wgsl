@@ -2,7 +2,7 @@
 // (propagate.wgsl) and the raster module (raster.wgsl). Layouts are written by
 // src/render/volume/gpu.rs.
 
-// A volume (uniform, 160 bytes).
+// A volume (uniform, 176 bytes).
 struct VolParams {
     centre: vec4<f32>,    // xyz centre (world), w scene scale (m)
     axis0: vec4<f32>,     // local x axis (world, unit), w half extent (m)
@@ -11,9 +11,12 @@ struct VolParams {
     lay: vec4<u32>,       // entry axis e, lateral j, lateral k, 1 when the entry face is negative
     dims: vec4<u32>,      // slab G-buffer side, projector side, tile side (texels), seed
     counts: vec4<u32>,    // photon capacity, slabs, exit-face mask (bit per face code), photons seeded
-    splat: vec4<f32>,     // overlap, max anisotropy, spread, 0
+    splat: vec4<f32>,     // overlap, max anisotropy, spread, flux scale (progressive mode)
     bounds_lo: vec4<f32>, // scene box (world), for the projector march
     bounds_hi: vec4<f32>,
+    // This frame's ranges of the trace list (level 0's live list): start and count entering
+    // slab 0, start and count the projectors march (src/volume/progressive.rs).
+    progress: vec4<u32>,
 }
 
 // One probe: a slab's G_near / G_far or a projector (uniform, dynamic offset, 256-byte stride).

@@ -21,7 +21,9 @@ use crate::components::CausticsVolume;
 use crate::optics;
 use crate::scene::CausticsScene;
 use crate::scene::gpu::material_rows;
-use crate::volume::{VolumeFrame, face_code, seed_photons};
+use crate::volume::{
+    VolumeFrame, VolumeRun, face_code, progressive_order, progressive_scale, seed_photons,
+};
 
 /// Stride of the probe uniforms (dynamic offsets).
 pub const PROBE_STRIDE: u64 = 256;
@@ -29,6 +31,8 @@ pub const PROBE_STRIDE: u64 = 256;
 pub const COUNT_WORDS: u64 = 104;
 /// First counter word (`CNT` in common.wgsl).
 pub const CNT: u64 = 72;
+/// Bytes of `VolParams`.
+const PARAMS: u64 = 176;
 /// Bytes of a photon / hit record.
 const RECORD: u64 = 64;
 
@@ -200,10 +204,16 @@ pub struct VolumeGpu {
     pub cube_depth: TextureView,
     /// Last signatures.
     pub sig: Signatures,
-    /// First slab to re-run this frame (`slabs`: projectors only); `None`: nothing.
-    pub pending: Option<u32>,
-    /// Set by the passes when they ran `pending`.
+    /// First slab touched by changes not run yet (`slabs`: projectors only); `None`: none.
+    pub change: Option<u32>,
+    /// This frame's update ([`schedule_run`]); `None`: nothing re-runs.
+    pub run: Option<VolumeRun>,
+    /// Set by the passes when they ran `run`.
     pub ran: AtomicBool,
+    /// Photons seeded (the capacity used), and those carrying flux (the trace list).
+    pub seeded: (u32, u32),
+    /// Trace-list entries traced in the current accumulation (progressive mode).
+    pub traced: u32,
     /// In some caustics camera's frustum (or culling off).
     pub visible: bool,
 }
@@ -303,7 +313,7 @@ impl VolumeGpu {
             exit_mask: 0,
             params: device.create_buffer(&BufferDescriptor {
                 label: Some("caustics:buffer:volume_params"),
-                size: 160,
+                size: PARAMS,
                 usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -364,22 +374,24 @@ impl VolumeGpu {
             slab_depth: depth(device, key.gbuffer),
             cube_depth: depth(device, key.projector),
             sig: Signatures::default(),
-            pending: Some(0),
+            change: Some(0),
+            run: None,
             ran: AtomicBool::new(false),
+            seeded: (0, 0),
+            traced: 0,
             visible: false,
         }
     }
 
-    /// Write `VolParams` and the probe entries.
+    /// Write `VolParams` (but its per-frame part, [`Self::write_run`]) and the probe entries.
     pub fn write_uniforms(
         &self,
         queue: &RenderQueue,
         scene: &VolumeScene,
         volume: &CausticsVolume,
-        seeded: u32,
     ) {
         let f = &self.frame;
-        let mut b: Vec<u8> = Vec::with_capacity(160);
+        let mut b: Vec<u8> = Vec::with_capacity(PARAMS as usize);
         let mut fl = |v: f32| b.extend_from_slice(&v.to_le_bytes());
         for v in [f.centre.x, f.centre.y, f.centre.z, scene.scale] {
             fl(v);
@@ -403,11 +415,12 @@ impl VolumeGpu {
             u(self.key.capacity),
             u(self.key.slabs),
             u(self.exit_mask),
-            u(seeded),
+            u(self.seeded.0),
         ] {
             fl(v);
         }
-        for v in [volume.splat_overlap, 16.0, 0.5, 0.0] {
+        let scale = progressive_scale(self.seeded.1, self.traced);
+        for v in [volume.splat_overlap, 16.0, 0.5, scale] {
             fl(v);
         }
         let (lo, hi) = scene.bounds;
@@ -415,6 +428,7 @@ impl VolumeGpu {
             fl(v);
         }
         queue.write_buffer(&self.params, 0, &b);
+        self.write_run(queue);
 
         let far = {
             let (lo, hi) = scene.bounds;
@@ -458,15 +472,34 @@ impl VolumeGpu {
         queue.write_buffer(&self.probes, 0, &probes);
     }
 
-    /// Seed the entry face (section 3.4) into level 0: states, the identity live list, the
-    /// live count; the other counts and counters are zeroed. Returns the photons seeded.
+    /// The per-frame part of `VolParams`: the splats' flux scale (`splat.w`,
+    /// [`progressive_scale`] once this frame's run is done) and this frame's trace and project
+    /// ranges of the trace list (`progress`).
+    pub fn write_run(&self, queue: &RenderQueue) {
+        let after = self.run.map_or(self.traced, |r| r.traced_after);
+        let scale = progressive_scale(self.seeded.1, after);
+        queue.write_buffer(&self.params, 124, &scale.to_le_bytes());
+        let (trace, project) = self.run.map_or(((0, 0), (0, 0)), |r| (r.trace, r.project));
+        let words = [
+            trace.0,
+            trace.1.saturating_sub(trace.0),
+            project.0,
+            project.1.saturating_sub(project.0),
+        ];
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        queue.write_buffer(&self.params, 160, &bytes);
+    }
+
+    /// Seed the entry face (section 3.4) into level 0: the states, the trace list (the photons
+    /// carrying flux, in index order, or in [`progressive_order`] when `volume.progressive` is
+    /// on) and its length; the other counts and counters are zeroed. Sets [`Self::seeded`].
     pub fn seed(
         &mut self,
         queue: &RenderQueue,
         world_from_volume: &Affine3A,
         volume: &CausticsVolume,
         lights: &[crate::scene::TraceLight],
-    ) -> u32 {
+    ) {
         let photons = seed_photons(
             world_from_volume,
             volume.size,
@@ -475,7 +508,7 @@ impl VolumeGpu {
             self.key.capacity,
         );
         let mut states = Vec::with_capacity(photons.len() * RECORD as usize);
-        let mut live = Vec::new();
+        let mut live: Vec<u32> = Vec::new();
         let mut entered = 0.0;
         for (i, p) in photons.iter().enumerate() {
             let flags: u32 = if p.terminated { 4 | (9 << 4) } else { 0 };
@@ -500,22 +533,26 @@ impl VolumeGpu {
                 states.extend_from_slice(&v.to_le_bytes());
             }
             if !p.terminated {
-                live.extend_from_slice(&(i as u32).to_le_bytes());
+                live.push(i as u32);
                 entered += optics::luminance(p.flux);
             }
+        }
+        if volume.progressive > 0 && (volume.progressive as usize) < live.len() {
+            live = progressive_order(&live);
         }
         if !states.is_empty() {
             queue.write_buffer(&self.states, 0, &states);
         }
         if !live.is_empty() {
-            queue.write_buffer(&self.live, 0, &live);
+            let bytes: Vec<u8> = live.iter().flat_map(|i| i.to_le_bytes()).collect();
+            queue.write_buffer(&self.live, 0, &bytes);
         }
         let mut counts = vec![0u8; (COUNT_WORDS * 4) as usize];
-        counts[0..4].copy_from_slice(&((live.len() / 4) as u32).to_le_bytes());
+        counts[0..4].copy_from_slice(&(live.len() as u32).to_le_bytes());
         let at = (CNT * 4) as usize;
         counts[at..at + 4].copy_from_slice(&entered.to_le_bytes());
         queue.write_buffer(&self.counts, 0, &counts);
-        photons.len() as u32
+        self.seeded = (photons.len() as u32, live.len() as u32);
     }
 }
 

@@ -8,6 +8,7 @@
 //! technique is not `Volume`, without a volume, without a caustic light, or for a volume
 //! outside every volume camera's frustum.
 
+pub mod gizmo;
 pub mod gpu;
 pub mod passes;
 pub mod pipelines;
@@ -54,6 +55,7 @@ pub(crate) fn build(app: &mut App) {
             )),
         }
     };
+    gizmo::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };

@@ -21,6 +21,7 @@ use super::gpu::{CNT, PROBE_STRIDE, VolumeGpu, tile_stride};
 use super::pipelines::VolumePipelines;
 use super::view::{VolumeStore, VolumeViewFrame, VolumeViewState};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
+use crate::volume::VolumeRun;
 
 /// Most slabs a volume can have (the validator's bound).
 pub const MAX_SLABS: usize = 64;
@@ -155,11 +156,12 @@ fn raster_gbuffer(
     span.end(&mut pass);
 }
 
-/// Re-run volume `v` from slab `first` (`first == slabs`: projectors only).
+/// Run `run` on volume `v`: slabs from `run.first_slab` on (none when it is `slabs`), then
+/// the projectors over `run.project`.
 fn update_volume(
     ctx: &mut RenderContext,
     v: &VolumeGpu,
-    first: u32,
+    run: VolumeRun,
     store: &VolumeStore,
     pipelines: &VolumePipelines,
     cache: &PipelineCache,
@@ -215,11 +217,10 @@ fn update_volume(
         )),
     );
     let slabs = v.key.slabs;
-    let cap = v.key.capacity as u64;
-    if first == 0 {
+    if run.restarts() {
         ctx.command_encoder().clear_buffer(&v.finals, 0, None);
     }
-    for k in first..slabs {
+    for k in run.first_slab..slabs {
         let (prop_name, gbuf_name) = SLAB_PASSES[(k as usize).min(MAX_SLABS - 1)];
         raster_gbuffer(
             ctx,
@@ -293,11 +294,14 @@ fn update_volume(
         );
         log.record(PROJECTOR_GBUFFER_PASSES[face as usize]);
     }
-    let encoder = ctx.command_encoder();
-    encoder.clear_buffer(&v.hits, 0, None);
-    encoder.clear_buffer(&v.tiles, 0, Some(7 * tile_stride(&v.key) * 4));
-    // Counters of the projectors are recounted on every run.
-    encoder.clear_buffer(&v.counts, (CNT + 1) * 4, Some(4 * 4));
+    if run.project.0 == 0 {
+        // A new projection of the trace list: hits, tiles and the projectors' counters are
+        // recounted (a later progressive batch adds to them).
+        let encoder = ctx.command_encoder();
+        encoder.clear_buffer(&v.hits, 0, None);
+        encoder.clear_buffer(&v.tiles, 0, Some(7 * tile_stride(&v.key) * 4));
+        encoder.clear_buffer(&v.counts, (CNT + 1) * 4, Some(4 * 4));
+    }
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     let encoder = ctx.command_encoder();
@@ -307,7 +311,12 @@ fn update_volume(
     });
     let span = diagnostics.pass_span(&mut pass, PROJECT_PASS);
     pass.set_pipeline(project);
-    let groups = (cap as u32).div_ceil(64).min(65535);
+    let groups = run
+        .project
+        .1
+        .saturating_sub(run.project.0)
+        .div_ceil(64)
+        .clamp(1, 65535);
     for face in 0..7u32 {
         if face < 6 && v.exit_mask & (1 << face) == 0 {
             continue;
@@ -349,8 +358,8 @@ pub fn volume_passes(
     };
     if store.updater == Some(entity) {
         for v in &store.volumes {
-            if let (Some(first), true) = (v.pending, v.visible)
-                && update_volume(&mut ctx, v, first, &store, &pipelines, &cache, &log)
+            if let (Some(run), true) = (v.run, v.visible)
+                && update_volume(&mut ctx, v, run, &store, &pipelines, &cache, &log)
             {
                 v.ran.store(true, Ordering::Release);
             }

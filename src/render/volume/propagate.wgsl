@@ -229,10 +229,17 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slab = probe.info.x;
     let cap = vp.counts.x;
     let slabs = vp.counts.y;
-    if gid.x >= atomicLoad(&counts[slab]) || gid.x >= cap {
+    // Slab 0 takes this frame's range of the trace list; later slabs their live lists.
+    var n = atomicLoad(&counts[slab]);
+    var at = slab * cap + gid.x;
+    if slab == 0u {
+        n = vp.progress.y;
+        at = vp.progress.x + gid.x;
+    }
+    if gid.x >= n || gid.x >= cap || at >= cap * slabs {
         return;
     }
-    let i = live[slab * cap + gid.x];
+    let i = live[at];
     if i >= cap {
         return;
     }
@@ -397,7 +404,10 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(1)
 fn write_args() {
     let slab = probe.info.x;
-    let n = atomicLoad(&counts[slab]);
+    var n = atomicLoad(&counts[slab]);
+    if slab == 0u {
+        n = vp.progress.y;
+    }
     args[slab] = Args(min((n + 63u) / 64u, 65535u), 1u, 1u);
 }
 
@@ -475,7 +485,11 @@ fn record_hit(i: u32, p: VolPhoton, pos: vec3<f32>, n: vec3<f32>, tile: u32, til
 
 @compute @workgroup_size(64)
 fn project(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    // This frame's range of the trace list (every photon that carried flux in).
+    if gid.x >= vp.progress.w || vp.progress.z + gid.x >= vp.counts.x {
+        return;
+    }
+    let i = live[vp.progress.z + gid.x];
     if i >= vp.counts.x {
         return;
     }

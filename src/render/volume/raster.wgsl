@@ -93,7 +93,8 @@ fn vs_splat(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) ->
     out.pos = view.clip_from_world * vec4(world, 1.0);
     out.q = q;
     out.world = world;
-    out.e = h.flux.xyz / area;
+    // splat.w: progressive mode's photons / traced (1 once everything is traced).
+    out.e = h.flux.xyz * vp.splat.w / area;
     return out;
 }
 

@@ -18,7 +18,7 @@ use super::gpu::{
 use crate::components::{CausticsTechnique, CausticsVolume};
 use crate::render::ExtractedCaustics;
 use crate::render::aaps::scene::ExtractedCausticsScene;
-use crate::volume::VolumeFrame;
+use crate::volume::{VolumeFrame, schedule_run};
 
 /// The main world's volumes (entity, settings, world from volume).
 #[derive(Resource, Default, Clone)]
@@ -158,8 +158,11 @@ pub fn prepare_volumes(
             Some(i) => old.swap_remove(i),
             None => VolumeGpu::new(&device, *entity, key, frame),
         };
-        if gpu.ran.swap(false, Ordering::AcqRel) {
-            gpu.pending = None;
+        if gpu.ran.swap(false, Ordering::AcqRel)
+            && let Some(run) = gpu.run.take()
+        {
+            gpu.change = None;
+            gpu.traced = run.traced_after;
         }
         gpu.frame = frame;
         gpu.exit_mask = exit_mask(volume);
@@ -171,6 +174,7 @@ pub fn prepare_volumes(
             volume.photons,
             volume.splat_overlap.to_bits(),
             volume.entry,
+            volume.progressive,
         ));
         // The per-slab hashes walk every instance: only when the scene or the volume changed.
         let slab_sigs = if volume_sig == gpu.sig.volume && scene.generation == gpu.sig.generation {
@@ -198,13 +202,17 @@ pub fn prepare_volumes(
         };
         if first_change == Some(0) && (sig.volume != gpu.sig.volume || sig.lights != gpu.sig.lights)
         {
-            let seeded = gpu.seed(&queue, affine, volume, &vs.lights);
-            gpu.write_uniforms(&queue, vs, volume, seeded);
-        } else if first_change.is_some() {
-            gpu.write_uniforms(&queue, vs, volume, 0);
+            gpu.seed(&queue, affine, volume, &vs.lights);
         }
         if let Some(k) = first_change {
-            gpu.pending = Some(gpu.pending.map_or(k, |p| p.min(k)));
+            gpu.change = Some(gpu.change.map_or(k, |p| p.min(k)));
+        }
+        let (_, live) = gpu.seeded;
+        gpu.run = schedule_run(gpu.change, slabs, live, gpu.traced, volume.progressive);
+        if first_change.is_some() {
+            gpu.write_uniforms(&queue, vs, volume);
+        } else if gpu.run.is_some() {
+            gpu.write_run(&queue);
         }
         gpu.sig = sig;
         next.push(gpu);
