@@ -127,14 +127,7 @@ impl CausticsVolume {
         (
             Self {
                 size,
-                exit: vec![
-                    VolumeFace::PosX,
-                    VolumeFace::NegX,
-                    VolumeFace::PosY,
-                    VolumeFace::NegY,
-                    VolumeFace::PosZ,
-                    VolumeFace::NegZ,
-                ],
+                exit: VolumeFace::ALL.to_vec(),
                 ..Default::default()
             },
             Transform {
@@ -165,6 +158,16 @@ pub enum VolumeFace {
 }
 
 impl VolumeFace {
+    /// The six faces, in face-code order (+X, -X, +Y, -Y, +Z, -Z).
+    pub const ALL: [VolumeFace; 6] = [
+        Self::PosX,
+        Self::NegX,
+        Self::PosY,
+        Self::NegY,
+        Self::PosZ,
+        Self::NegZ,
+    ];
+
     /// Outward unit normal in the volume's local space.
     pub fn normal(self) -> Vec3 {
         match self {

@@ -34,15 +34,6 @@ pub struct GizmoSegment {
     pub kind: VolumeGizmoKind,
 }
 
-const FACES: [VolumeFace; 6] = [
-    VolumeFace::PosX,
-    VolumeFace::NegX,
-    VolumeFace::PosY,
-    VolumeFace::NegY,
-    VolumeFace::PosZ,
-    VolumeFace::NegZ,
-];
-
 /// The role of `face`'s outline: exit when listed as an exit and not as a culling face (the
 /// passes' exit mask), else culling; the entry face is `Entry` unless it is also an exit.
 pub fn face_kind(volume: &CausticsVolume, face: VolumeFace) -> VolumeGizmoKind {
@@ -108,7 +99,7 @@ pub fn volume_gizmo_segments(
             }
         }
     };
-    for face in FACES {
+    for face in VolumeFace::ALL {
         let n = face.normal();
         let axis = if n.x != 0.0 {
             0

@@ -422,7 +422,7 @@ fn volume_from_gltf_extras() {
     let v = volume_from_extras(
         r#"{"caustics_volume": {"size": [2, 1, 3], "slabs": 4, "photons": 5000,
             "entry": "NegZ", "exit": ["PosZ", "+X"], "culling": ["NegY"],
-            "projector_resolution": 128, "gbuffer_resolution": 64}}"#,
+            "projector_resolution": 128, "gbuffer_resolution": 64, "progressive": 2500}}"#,
     )
     .expect("parsed");
     assert_eq!(v.size, Vec3::new(2.0, 1.0, 3.0));
@@ -431,6 +431,7 @@ fn volume_from_gltf_extras() {
     assert_eq!(v.exit, vec![VolumeFace::PosZ, VolumeFace::PosX]);
     assert_eq!(v.culling, vec![VolumeFace::NegY]);
     assert_eq!((v.projector_resolution, v.gbuffer_resolution), (128, 64));
+    assert_eq!(v.progressive, 2500);
     assert!(volume_from_extras(r#"{"other": 1}"#).is_none());
     assert!(volume_from_extras("not json").is_none());
 }

@@ -28,17 +28,28 @@ fn glass_sphere(
     .expect("render")
 }
 
-fn slab_frames(r: &RenderReport) -> Vec<usize> {
+/// The measured frames' pass lists, and how often `name` was dispatched in all of them. (The log
+/// is drained in the main world while the render world may be a frame behind, so one list can
+/// hold two frames' passes and the next none: count dispatches, not lists.)
+const SLAB1: &str = "caustics/volume/slab1";
+
+fn dispatches(r: &RenderReport, name: &str) -> usize {
     r.frame_passes
         .iter()
-        .enumerate()
-        .filter(|(_, f)| f.iter().any(|p| p == "caustics/volume/slab1"))
-        .map(|(n, _)| n)
-        .collect()
+        .flatten()
+        .filter(|p| *p == name)
+        .count()
 }
 
-/// Progressive mode: a pool of 20 000 photons in batches of 5 000 runs the slabs in exactly
-/// four consecutive frames and then nothing but the splats; the accumulated result is the full
+/// Index of the last frame list holding `name`.
+fn last_with(r: &RenderReport, name: &str) -> Option<usize> {
+    r.frame_passes
+        .iter()
+        .rposition(|f| f.iter().any(|p| p == name))
+}
+
+/// Progressive mode: a pool of 20 000 photons in batches of 5 000 runs the slabs and the
+/// projectors exactly four times and then nothing but the splats; the accumulated result is the full
 /// update's (the same photons: the same receivers, hit for hit); a partial accumulation, scaled
 /// by photons / traced, already estimates the full energy.
 #[test]
@@ -64,13 +75,25 @@ fn volume_progressive_mode_converges_to_the_full_update() {
     for (n, f) in prog.frame_passes.iter().enumerate() {
         println!("progressive frame {n}: {f:?}");
     }
-    assert_eq!(slab_frames(&full).len(), 1, "{:?}", full.frame_passes);
+    assert_eq!(dispatches(&full, SLAB1), 1, "{:?}", full.frame_passes);
     // No gizmo component: no gizmo pass.
-    assert!(full.frame_passes.iter().flatten().all(|p| p != GIZMO_PASS));
-    let frames = slab_frames(&prog);
-    assert_eq!(frames.len(), 4, "{:?}", prog.frame_passes);
-    assert!(frames.windows(2).all(|w| w[1] == w[0] + 1), "{frames:?}");
-    for f in &prog.frame_passes[frames[3] + 1..] {
+    assert_eq!(dispatches(&full, GIZMO_PASS), 0);
+    // Four batches: every slab and the projectors four times, then only the splats.
+    for pass in [SLAB1, "caustics/volume/slab3", "caustics/volume/project"] {
+        assert_eq!(
+            dispatches(&prog, pass),
+            4,
+            "{pass}: {:?}",
+            prog.frame_passes
+        );
+    }
+    let last = last_with(&prog, SLAB1).unwrap();
+    assert!(
+        last + 3 < prog.frame_passes.len(),
+        "{:?}",
+        prog.frame_passes
+    );
+    for f in &prog.frame_passes[last + 1..] {
         assert!(
             f.iter().all(|p| p.ends_with("/splat")
                 || p.ends_with("/blur")
@@ -99,11 +122,11 @@ fn volume_progressive_mode_converges_to_the_full_update() {
     assert!(m.energy_error.abs() < 1e-3, "{}", m.energy_error);
     assert_eq!(pc.nan_guards, 0);
 
-    // 20 batches of 1 000: read back part-way (the job stops after 4 + a few frames).
+    // 40 batches of 500: read back part-way (the job stops after 4 + a few frames).
     let part = glass_sphere(
         4,
         CausticsVolume {
-            progressive: 1_000,
+            progressive: 500,
             ..base
         },
         None,
@@ -114,13 +137,13 @@ fn volume_progressive_mode_converges_to_the_full_update() {
     let m = compare(&img, &fi, None).expect("same size");
     let traced = c.hits as f64 / fc.hits as f64;
     println!(
-        "progressive 1000/frame, part-way: {:.0} % of the hits, energy vs full {:+.2} %, RMSE {:.1} lx, FLIP {:.4}",
+        "progressive 500/frame, part-way: {:.0} % of the hits, energy vs full {:+.2} %, RMSE {:.1} lx, FLIP {:.4}",
         traced * 100.0,
         m.energy_error * 100.0,
         m.rmse,
         m.flip
     );
-    assert!(traced > 0.05 && traced < 0.9, "not part-way: {traced}");
+    assert!(traced > 0.02 && traced < 0.9, "not part-way: {traced}");
     assert!(m.energy_error.abs() < 0.10, "{}", m.energy_error);
     assert!(c.splatted_lm <= c.entered_lm * (1.0 + 1e-5), "{c:?}");
 }
@@ -203,20 +226,13 @@ fn gizmo_midpoints(
     depth_test: bool,
 ) -> std::collections::HashMap<VolumeGizmoKind, (u32, u32)> {
     let report = glass_sphere(4, CausticsVolume::default(), Some(hook));
-    // Once per frame, as the splats (the log is drained in the main world while the render
-    // world is a frame behind, so a frame's list may hold two or none).
-    let count = |name: &str| {
-        report
-            .frame_passes
-            .iter()
-            .flatten()
-            .filter(|p| *p == name)
-            .count()
-    };
-    assert!(count(GIZMO_PASS) >= 3, "{:?}", report.frame_passes);
-    assert_eq!(
-        count(GIZMO_PASS),
-        count("caustics/volume/splat"),
+    // Once per frame, as the splats (give or take the frame the log was drained in).
+    let (g, splats) = (
+        dispatches(&report, GIZMO_PASS),
+        dispatches(&report, "caustics/volume/splat"),
+    );
+    assert!(
+        g >= 3 && g.abs_diff(splats) <= 1,
         "{:?}",
         report.frame_passes
     );

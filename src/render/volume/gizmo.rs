@@ -13,8 +13,7 @@ use bevy::render::render_resource::{
     BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
     BufferUsages, CachedRenderPipelineId, ColorTargetState, ColorWrites, FragmentState, LoadOp,
     Operations, PipelineCache, PrimitiveState, PrimitiveTopology, RenderPassColorAttachment,
-    RenderPassDescriptor, RenderPipelineDescriptor, ShaderStages, StoreOp, TextureFormat,
-    VertexState, binding_types,
+    RenderPipelineDescriptor, ShaderStages, StoreOp, TextureFormat, VertexState, binding_types,
 };
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewTarget};
@@ -206,9 +205,12 @@ fn volume_gizmo_pass(
     );
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
-    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
-        label: Some("caustics_volume_gizmos"),
-        color_attachments: &[Some(RenderPassColorAttachment {
+    // The tone-mapped image is loaded and kept; the lines are drawn on top. (Not
+    // `ViewTarget::get_color_attachment`: tone mapping wrote the texture directly, so its
+    // attachment's first call would clear it.)
+    let mut pass = ctx.begin_tracked_render_pass(super::passes::colour_pass(
+        "caustics_volume_gizmos",
+        &[Some(RenderPassColorAttachment {
             view: target.main_texture_view(),
             depth_slice: None,
             resolve_target: None,
@@ -217,11 +219,7 @@ fn volume_gizmo_pass(
                 store: StoreOp::Store,
             },
         })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
+    ));
     let span = diagnostics.pass_span(&mut pass, GIZMO_PASS);
     pass.set_render_pipeline(render);
     pass.set_bind_group(0, &group, &[]);

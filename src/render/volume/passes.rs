@@ -104,7 +104,7 @@ fn cleared(view: &TextureView) -> Option<RenderPassColorAttachment<'_>> {
 }
 
 /// A render pass with colour targets only.
-fn colour_pass<'a>(
+pub(super) fn colour_pass<'a>(
     label: &'static str,
     color_attachments: &'a [Option<RenderPassColorAttachment<'a>>],
 ) -> RenderPassDescriptor<'a> {
