@@ -4,8 +4,10 @@
 //! `report/VOLUME.md`.
 //!
 //! ```text
-//! cargo run --release --example volume_report -- [--scenes a,b,..] [--out DIR]
+//! cargo run --release --example volume_report -- [--scenes a,b,..] [--out DIR] [--progressive 1]
 //! ```
+//!
+//! `--progressive 1` measures progressive mode instead (`report/VOLUME_PROGRESSIVE.md`).
 //!
 //! As in the paper, optimisations are off (differential updates off) and a full update is
 //! forced every frame (the sun turns by 1e-4 rad each frame); medians over the measured frames.
@@ -14,7 +16,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use bevy::prelude::*;
-use bevy_caustics::headless::{RenderJob, find_adapter, run};
+use bevy_caustics::headless::{RenderJob, RenderReport, find_adapter, run};
 use bevy_caustics::reference::{CausticImage, compare};
 use bevy_caustics::{CausticsTechnique, CausticsVolume};
 
@@ -27,6 +29,102 @@ fn turn_sun(world: &mut World, frame: u32) {
     }
 }
 
+/// Per slab (raster + propagation) and projector GPU ms, and the error against `reference`.
+fn numbers(
+    report: &RenderReport,
+    slabs: u32,
+    reference: &Option<CausticImage>,
+) -> (Vec<String>, f64, String, String, String) {
+    let ms = |name: &str| report.pass_ms.get(name).copied().unwrap_or(0.0);
+    let slab_ms: Vec<String> = (1..=slabs)
+        .map(|k| {
+            format!(
+                "{:.1}",
+                ms(&format!("caustics/volume/slab{k}"))
+                    + ms(&format!("caustics/volume/slab{k}_gbuffer"))
+            )
+        })
+        .collect();
+    let proj: f64 = (0..6)
+        .map(|f| ms(&format!("caustics/volume/projector{f}_gbuffer")))
+        .sum::<f64>()
+        + ms("caustics/volume/project");
+    let (energy, rmse, flip) = match (&report.caustics, reference) {
+        (Some(img), Some(r)) => {
+            compare(img, r, None).map_or(("-".into(), "-".into(), "-".into()), |m| {
+                (
+                    format!("{:+.3}", m.energy_error),
+                    format!("{:.1}", m.rmse),
+                    format!("{:.4}", m.flip),
+                )
+            })
+        }
+        _ => ("-".into(), "-".into(), "-".into()),
+    };
+    (slab_ms, proj, energy, rmse, flip)
+}
+
+fn render(job: RenderJob, scene: &str) -> RenderReport {
+    run(job).unwrap_or_else(|e| {
+        eprintln!("error: {scene}: {e}");
+        std::process::exit(2)
+    })
+}
+
+/// Progressive mode (section 3.5) with the sun turning every frame: every frame restarts the
+/// accumulation, so it traces one batch; its GPU ms per frame and the error of that one-batch
+/// estimate (photons / traced scaling) against the reference, next to the full update.
+fn progressive_section(root: &std::path::Path, scenes: &[String]) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "## Progressive mode\n\nG 200², a pool of 20 000 photons, 3 slabs, the sun turned every \
+         frame (so every frame restarts and traces one batch). GPU ms of one frame's update \
+         (slabs 1-3 + projectors); the error of that frame's one-batch estimate against the \
+         reference. Once the pool is traced the accumulation equals the full update (test \
+         `volume_progressive_mode_converges_to_the_full_update`).\n\n\
+         | scene | photons per frame | slabs ms | projectors ms | update ms | energy | RMSE lx | FLIP |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for scene in scenes {
+        let reference =
+            CausticImage::read_exr(root.join(format!("assets/reference/{scene}_128.exr"))).ok();
+        for batch in [0u32, 10_000, 5_000, 2_000] {
+            eprintln!("{scene}: progressive {batch}");
+            let report = render(
+                RenderJob {
+                    scene: root.join(format!("assets/scenes/{scene}.gltf")),
+                    technique: CausticsTechnique::Volume,
+                    width: 128,
+                    height: 128,
+                    frames: 8,
+                    per_frame: Some(turn_sun),
+                    volume: CausticsVolume {
+                        photons: 20_000,
+                        progressive: batch,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                },
+                scene,
+            );
+            let (slab_ms, proj, energy, rmse, flip) = numbers(&report, 3, &reference);
+            let slabs: f64 = slab_ms.iter().filter_map(|v| v.parse::<f64>().ok()).sum();
+            let label = if batch == 0 {
+                "20000 (off)".to_string()
+            } else {
+                batch.to_string()
+            };
+            let _ = writeln!(
+                md,
+                "| {scene} | {label} | {slabs:.1} | {proj:.1} | {:.1} | {energy} | {rmse} | {flip} |",
+                slabs + proj
+            );
+        }
+    }
+    md
+}
+
 fn main() {
     bevy_caustics::headless::quiet_headless_environment();
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -35,8 +133,10 @@ fn main() {
         .map(String::from)
         .to_vec();
     let mut out = root.join("report");
+    let mut progressive = false;
     for w in args.chunks(2) {
         match (w[0].as_str(), w.get(1)) {
+            ("--progressive", _) => progressive = true,
             ("--scenes", Some(v)) => scenes = v.split(',').map(String::from).collect(),
             ("--out", Some(v)) => out = PathBuf::from(v),
             (o, _) => {
@@ -49,6 +149,14 @@ fn main() {
         eprintln!("error: {e}");
         std::process::exit(2)
     });
+    if progressive {
+        let mut md = format!(
+            "# Caustics volumes: progressive mode\n\nAdapter: {adapter}. 128x128 camera, medians of GPU ms over the measured frames.\n\n"
+        );
+        md.push_str(&progressive_section(&root, &scenes));
+        write_report(&out, "VOLUME_PROGRESSIVE.md", &md);
+        return;
+    }
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -75,56 +183,28 @@ fn main() {
                 CausticImage::read_exr(root.join(format!("assets/reference/{scene}_128.exr"))).ok();
             for (g, photons) in CONFIGS {
                 eprintln!("{scene}: {slabs} slab(s), G {g}, {photons} photons");
-                let report = run(RenderJob {
-                    scene: root.join(format!("assets/scenes/{scene}.gltf")),
-                    technique: CausticsTechnique::Volume,
-                    width: 128,
-                    height: 128,
-                    frames: 8,
-                    per_frame: Some(turn_sun),
-                    volume: CausticsVolume {
-                        slabs,
-                        photons,
-                        gbuffer_resolution: g,
-                        projector_resolution: g,
-                        differential: false,
+                let report = render(
+                    RenderJob {
+                        scene: root.join(format!("assets/scenes/{scene}.gltf")),
+                        technique: CausticsTechnique::Volume,
+                        width: 128,
+                        height: 128,
+                        frames: 8,
+                        per_frame: Some(turn_sun),
+                        volume: CausticsVolume {
+                            slabs,
+                            photons,
+                            gbuffer_resolution: g,
+                            projector_resolution: g,
+                            differential: false,
+                            ..Default::default()
+                        },
                         ..Default::default()
                     },
-                    ..Default::default()
-                });
-                let report = match report {
-                    Ok(r) => r,
-                    Err(e) => {
-                        eprintln!("error: {scene}: {e}");
-                        std::process::exit(2);
-                    }
-                };
+                    scene,
+                );
+                let (slab_ms, proj, energy, rmse, flip) = numbers(&report, slabs, &reference);
                 let ms = |name: &str| report.pass_ms.get(name).copied().unwrap_or(0.0);
-                let slab_ms: Vec<String> = (1..=slabs)
-                    .map(|k| {
-                        format!(
-                            "{:.1}",
-                            ms(&format!("caustics/volume/slab{k}"))
-                                + ms(&format!("caustics/volume/slab{k}_gbuffer"))
-                        )
-                    })
-                    .collect();
-                let proj: f64 = (0..6)
-                    .map(|f| ms(&format!("caustics/volume/projector{f}_gbuffer")))
-                    .sum::<f64>()
-                    + ms("caustics/volume/project");
-                let (energy, rmse, flip) = match (&report.caustics, &reference) {
-                    (Some(img), Some(r)) => {
-                        compare(img, r, None).map_or(("-".into(), "-".into(), "-".into()), |m| {
-                            (
-                                format!("{:+.3}", m.energy_error),
-                                format!("{:.1}", m.rmse),
-                                format!("{:.4}", m.flip),
-                            )
-                        })
-                    }
-                    _ => ("-".into(), "-".into(), "-".into()),
-                };
                 let _ = writeln!(
                     md,
                     "| {scene} | {g}² | {photons} | {} | {proj:.1} | {:.1} | {:.1} | {energy} | {rmse} | {flip} |",
@@ -136,9 +216,13 @@ fn main() {
         }
         md.push('\n');
     }
-    std::fs::create_dir_all(&out).ok();
-    let path = out.join("VOLUME.md");
-    if let Err(e) = std::fs::write(&path, &md) {
+    write_report(&out, "VOLUME.md", &md);
+}
+
+fn write_report(out: &std::path::Path, name: &str, md: &str) {
+    std::fs::create_dir_all(out).ok();
+    let path = out.join(name);
+    if let Err(e) = std::fs::write(&path, md) {
         eprintln!("error: cannot write {}: {e}", path.display());
         std::process::exit(2);
     }
