@@ -1,6 +1,7 @@
 //! The caustics-volume passes, in `Core3d` after the prepass (splats need the view depth) and
-//! before the composite. The first volume view of a frame runs the pending updates (slab
-//! G-buffers and propagation from the first changed slab on, then the projectors); every
+//! before the composite. The first volume view of a frame runs each volume's scheduled
+//! [`VolumeRun`] (slab G-buffers and propagation from the first changed slab on, or the next
+//! progressive batch through every slab, then the projectors over the run's range); every
 //! volume view then splats the visible volumes and blurs them into its caustics buffer. No
 //! GPU-to-CPU copy: live counts drive the indirect dispatches on the GPU.
 
