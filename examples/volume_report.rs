@@ -64,8 +64,19 @@ fn numbers(
     (slab_ms, proj, energy, rmse, flip)
 }
 
-fn render(job: RenderJob, scene: &str) -> RenderReport {
-    run(job).unwrap_or_else(|e| {
+/// Render `scene` at 128 x 128 with `volume` (fitted), the sun turning every frame.
+fn render(root: &std::path::Path, scene: &str, volume: CausticsVolume) -> RenderReport {
+    run(RenderJob {
+        scene: root.join(format!("assets/scenes/{scene}.gltf")),
+        technique: CausticsTechnique::Volume,
+        width: 128,
+        height: 128,
+        frames: 8,
+        per_frame: Some(turn_sun),
+        volume,
+        ..Default::default()
+    })
+    .unwrap_or_else(|e| {
         eprintln!("error: {scene}: {e}");
         std::process::exit(2)
     })
@@ -92,21 +103,13 @@ fn progressive_section(root: &std::path::Path, scenes: &[String]) -> String {
         for batch in [0u32, 10_000, 5_000, 2_000] {
             eprintln!("{scene}: progressive {batch}");
             let report = render(
-                RenderJob {
-                    scene: root.join(format!("assets/scenes/{scene}.gltf")),
-                    technique: CausticsTechnique::Volume,
-                    width: 128,
-                    height: 128,
-                    frames: 8,
-                    per_frame: Some(turn_sun),
-                    volume: CausticsVolume {
-                        photons: 20_000,
-                        progressive: batch,
-                        ..Default::default()
-                    },
+                root,
+                scene,
+                CausticsVolume {
+                    photons: 20_000,
+                    progressive: batch,
                     ..Default::default()
                 },
-                scene,
             );
             let (slab_ms, proj, energy, rmse, flip) = numbers(&report, 3, &reference);
             let slabs: f64 = slab_ms.iter().filter_map(|v| v.parse::<f64>().ok()).sum();
@@ -184,24 +187,16 @@ fn main() {
             for (g, photons) in CONFIGS {
                 eprintln!("{scene}: {slabs} slab(s), G {g}, {photons} photons");
                 let report = render(
-                    RenderJob {
-                        scene: root.join(format!("assets/scenes/{scene}.gltf")),
-                        technique: CausticsTechnique::Volume,
-                        width: 128,
-                        height: 128,
-                        frames: 8,
-                        per_frame: Some(turn_sun),
-                        volume: CausticsVolume {
-                            slabs,
-                            photons,
-                            gbuffer_resolution: g,
-                            projector_resolution: g,
-                            differential: false,
-                            ..Default::default()
-                        },
+                    &root,
+                    scene,
+                    CausticsVolume {
+                        slabs,
+                        photons,
+                        gbuffer_resolution: g,
+                        projector_resolution: g,
+                        differential: false,
                         ..Default::default()
                     },
-                    scene,
                 );
                 let (slab_ms, proj, energy, rmse, flip) = numbers(&report, slabs, &reference);
                 let ms = |name: &str| report.pass_ms.get(name).copied().unwrap_or(0.0);
