@@ -20,7 +20,10 @@ pub struct CausticsVolume {
     pub slabs: u32,
     /// Photon budget per update. Default 20 000. Range [0, 16 777 216]; negative values are
     /// clamped to 0 (a volume that traces nothing) with a warning. Signed so that a negative
-    /// value from an editor or a script is reported instead of wrapping. Cost: linear.
+    /// value from an editor or a script is reported instead of wrapping. Cost: linear. At most
+    /// 4 194 240 are traced (one dispatch), fewer where the GPU's storage bindings are smaller
+    /// (64 bytes per photon per slab); the entry face is divided among the photons traced, so
+    /// the energy is the same.
     pub photons: i32,
     /// Face photons enter through. Default `PosY` (the top).
     pub entry: VolumeFace,

@@ -341,6 +341,24 @@ fn volume_frame_slabs_touched() {
 /// Section 3.5's slab LOD: full count up to the distance, halved per doubling beyond, at
 /// least one slab; off when the distance is 0 or inputs are not finite.
 #[test]
+fn volume_photon_capacity() {
+    use bevy_caustics::render::volume::view::{MAX_PHOTONS_PER_DISPATCH, photon_capacity};
+    let big = u64::MAX;
+    assert_eq!(photon_capacity(20_000, 3, big), 20_000);
+    // One dispatch of 65 535 workgroups of 64 bounds the budget (the validator allows 2^24).
+    assert_eq!(photon_capacity(1 << 24, 1, big), MAX_PHOTONS_PER_DISPATCH);
+    assert_eq!(MAX_PHOTONS_PER_DISPATCH, 4_194_240);
+    // 128 MiB bindings (wgpu's default limit), 64 bytes per photon per slab.
+    assert_eq!(photon_capacity(1 << 24, 1, 128 << 20), 2_097_152);
+    assert_eq!(photon_capacity(1 << 24, 16, 128 << 20), 131_072);
+    // Zero or negative budgets still get one slot; zero slabs count as one.
+    assert_eq!(photon_capacity(0, 3, big), 1);
+    assert_eq!(photon_capacity(-5, 3, big), 1);
+    assert_eq!(photon_capacity(100, 0, big), 100);
+    assert_eq!(photon_capacity(100, 3, 0), 1);
+}
+
+#[test]
 fn volume_lod_slabs() {
     use bevy_caustics::render::volume::view::lod_slabs;
     assert_eq!(lod_slabs(8, 8.0, 1.0, 7.9), 8);

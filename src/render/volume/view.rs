@@ -73,6 +73,22 @@ pub fn lod_slabs(slabs: u32, lod_distance: f32, diagonal: f32, distance: f32) ->
     (slabs >> halvings).max(1)
 }
 
+/// Photons a volume traces (its buffers' capacity): its budget, bounded so that the photon
+/// levels (64 bytes per photon per slab) fit one storage binding of `max_binding_bytes`, and by
+/// one dispatch of the 1-D passes (65 535 workgroups of 64: [`MAX_PHOTONS_PER_DISPATCH`]). The
+/// entry face is divided among the photons traced, so the energy does not depend on the bound.
+/// At least 1.
+pub fn photon_capacity(photons: i32, slabs: u32, max_binding_bytes: u64) -> u32 {
+    let per_photon = 64 * slabs.max(1) as u64;
+    (photons.max(0) as u64)
+        .min(max_binding_bytes / per_photon)
+        .min(MAX_PHOTONS_PER_DISPATCH as u64)
+        .max(1) as u32
+}
+
+/// Photons one dispatch of the propagation or projector pass covers (65 535 × 64).
+pub const MAX_PHOTONS_PER_DISPATCH: u32 = 65_535 * 64;
+
 /// Decide, per volume, what to re-run; allocate and seed as needed.
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 pub fn prepare_volumes(
@@ -142,11 +158,7 @@ pub fn prepare_volumes(
             .fold(f32::INFINITY, f32::min);
         let slabs = lod_slabs(volume.slabs.max(1), volume.lod_distance, diagonal, nearest);
         let frame = VolumeFrame::new(affine, volume.size, volume.entry, slabs);
-        // Memory guard: the photon levels must fit one storage binding.
-        let per_photon = 64 * slabs as u64;
-        let capacity = (volume.photons as u64)
-            .min(max_bytes / per_photon)
-            .clamp(1, u32::MAX as u64) as u32;
+        let capacity = photon_capacity(volume.photons, slabs, max_bytes);
         let key = VolumeKey {
             capacity,
             slabs,
