@@ -118,6 +118,12 @@ pub struct ViewCausticsBuffer {
 }
 
 /// A view-sized `Rgba32Float` texture (the caustics buffer, the volumes' splat target).
+/// A view's clip-from-world matrix (the extracted one, else projection × inverse view).
+pub(crate) fn clip_from_world(view: &bevy::render::view::ExtractedView) -> Mat4 {
+    view.clip_from_world
+        .unwrap_or_else(|| view.clip_from_view * view.world_from_view.affine().inverse())
+}
+
 pub(crate) fn view_texture(
     device: &RenderDevice,
     label: &'static str,

@@ -372,9 +372,7 @@ pub fn prepare_aaps_views(
                 fresh.as_mut().unwrap()
             }
         };
-        let clip_from_world = view
-            .clip_from_world
-            .unwrap_or_else(|| view.clip_from_view * view.world_from_view.affine().inverse());
+        let clip_from_world = crate::render::clip_from_world(view);
         let eye = view.world_from_view.translation();
         let bytes = params_bytes(
             clip_from_world,

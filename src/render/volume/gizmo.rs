@@ -158,9 +158,7 @@ fn prepare_volume_gizmos(
         state.count = count;
         let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
         queue.write_buffer(&state.vertices, 0, &bytes);
-        let clip = view
-            .clip_from_world
-            .unwrap_or_else(|| view.clip_from_view * view.world_from_view.affine().inverse());
+        let clip = crate::render::clip_from_world(view);
         let test = [settings.depth_test as u32 as f32, DEPTH_MARGIN, 0.0, 0.0];
         let params: Vec<u8> = clip
             .to_cols_array()

@@ -419,8 +419,8 @@ impl VolumeGpu {
         ] {
             fl(v);
         }
-        let scale = progressive_scale(self.seeded.1, self.traced);
-        for v in [volume.splat_overlap, 16.0, 0.5, scale] {
+        // splat.w, the flux scale, is written by `write_run` below.
+        for v in [volume.splat_overlap, 16.0, 0.5, 1.0] {
             fl(v);
         }
         let (lo, hi) = scene.bounds;

@@ -115,9 +115,7 @@ pub fn prepare_volumes(
                     .is_some_and(|s| s.x > 0 && s.y > 0)
         })
         .map(|(e, _, _, view, _)| {
-            let clip = view
-                .clip_from_world
-                .unwrap_or_else(|| view.clip_from_view * view.world_from_view.affine().inverse());
+            let clip = crate::render::clip_from_world(view);
             (e, clip, view.world_from_view.translation())
         })
         .collect();
