@@ -19,8 +19,7 @@ use bevy_caustics::headless::{RenderJob, find_adapter, run};
 use bevy_caustics::reference::{CausticImage, ImageMetrics, compare};
 use plotters::prelude::*;
 
-const CONVERGED_PHOTONS: u64 = 1 << 23;
-const CONVERGED_SEED: u64 = 1;
+use bevy_caustics::reference::cache::{CONVERGED_PHOTONS, CONVERGED_SEED, converged_recipe};
 const SWEEP_SEED: u64 = 2;
 
 struct Point {
@@ -246,7 +245,7 @@ fn converged(
     let dir = root.join("assets/reference");
     let exr = dir.join(format!("{scene}_{size}.exr"));
     let meta = dir.join(format!("{scene}_{size}.json"));
-    let recipe = serde_json::json!({"scene": scene, "width": size, "height": size, "photons_per_light": CONVERGED_PHOTONS, "seed": CONVERGED_SEED, "technique": "reference"});
+    let recipe = converged_recipe(scene, size);
     if let (Ok(m), Ok(img)) = (std::fs::read_to_string(&meta), CausticImage::read_exr(&exr))
         && serde_json::from_str::<serde_json::Value>(&m).ok().as_ref() == Some(&recipe)
     {

@@ -73,6 +73,20 @@ pub fn beer_lambert(attenuation_color: Vec3, attenuation_distance: f32, length: 
     Vec3::new(c.x.powf(x), c.y.powf(x), c.z.powf(x))
 }
 
+/// Survival probability of Russian roulette (the reference tracer, after
+/// `TraceSettings::roulette_depth` specular events) for a path carrying `flux` that left its light with
+/// largest channel `flux0`: the path's throughput (largest channel), clamped to [0.05, 1].
+/// Guard: a zero or non-finite `flux0` (a photon of no flux) survives with 0.05.
+#[inline]
+pub fn roulette_survival(flux: Vec3, flux0: f32) -> f32 {
+    let q = flux.max_element() / flux0;
+    if q.is_finite() {
+        q.clamp(0.05, 1.0)
+    } else {
+        0.05
+    }
+}
+
 /// A finite-or-zero guard: returns `v` if every component is finite, else zero.
 /// The tracers count how often this fires.
 #[inline]

@@ -1,6 +1,7 @@
 //! The CPU ground truth: a deterministic multi-threaded light tracer, the caustic image type
 //! and the metrics every technique is judged by.
 
+pub mod cache;
 pub mod image;
 pub mod metrics;
 pub mod technique;

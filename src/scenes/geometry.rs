@@ -148,3 +148,76 @@ pub fn ring(radius: f32, height: f32, segments: u32) -> MeshGeometry {
     }
     mesh(p, n, idx)
 }
+
+/// A round brilliant-cut gem of girdle `radius`, centred on the girdle, table up (+Y), flat
+/// facets (each triangle its own vertices, normal = face normal, outward): an octagonal table
+/// (8 triangles), a crown of 8 star and 16 upper-girdle facets at 34.5 degrees, a girdle band
+/// 2 % of the radius thick (32 triangles) and a 16-facet pavilion at 40.75 degrees to the culet
+/// (80 triangles). Table 56 % of the diameter, the proportions of Tolkowsky's cut: with IOR 2.4
+/// most light entering the crown is totally reflected by the pavilion, often many times.
+pub fn brilliant(radius: f32) -> MeshGeometry {
+    let r = radius;
+    let girdle = 0.02 * r;
+    let table_r = 0.56 * r;
+    let crown_h = (r - table_r) * 34.5f32.to_radians().tan();
+    let pavilion_h = r * 40.75f32.to_radians().tan();
+    let ring = |n: u32, rad: f32, y: f32, k: u32| {
+        let phi = TAU * k as f32 / n as f32;
+        Vec3::new(rad * phi.cos(), y, rad * phi.sin())
+    };
+    let table = |k: u32| ring(8, table_r, girdle + crown_h, k % 8);
+    let top = |j: u32| ring(16, r, girdle, j % 16);
+    let bottom = |j: u32| ring(16, r, -girdle, j % 16);
+    let table_centre = Vec3::new(0.0, girdle + crown_h, 0.0);
+    let culet = Vec3::new(0.0, -girdle - pavilion_h, 0.0);
+    let mut tris: Vec<[Vec3; 3]> = Vec::new();
+    for k in 0..8 {
+        tris.push([table_centre, table(k), table(k + 1)]);
+        // Star facet on the table edge, upper-girdle facets on each girdle edge.
+        tris.push([table(k), table(k + 1), top(2 * k + 1)]);
+        tris.push([top(2 * k), top(2 * k + 1), table(k)]);
+        tris.push([top(2 * k + 1), top(2 * k + 2), table(k + 1)]);
+    }
+    for j in 0..16 {
+        tris.push([top(j), top(j + 1), bottom(j)]);
+        tris.push([top(j + 1), bottom(j + 1), bottom(j)]);
+        tris.push([bottom(j), bottom(j + 1), culet]);
+    }
+    let mut p = Vec::new();
+    let mut n = Vec::new();
+    let mut idx = Vec::new();
+    // The body is convex and holds the origin: a face normal points outwards when it points
+    // away from the origin; the winding follows the normal.
+    for [a, b, c] in tris {
+        let mut nrm = (b - a).cross(c - a).normalize();
+        let (b, c) = if nrm.dot(a + b + c) < 0.0 {
+            nrm = -nrm;
+            (c, b)
+        } else {
+            (b, c)
+        };
+        let base = p.len() as u32;
+        p.extend([a, b, c]);
+        n.extend([nrm; 3]);
+        idx.push([base, base + 1, base + 2]);
+    }
+    mesh(p, n, idx)
+}
+
+/// A closed box of size `s` standing on y = 0 with its faces pointing inwards (six receiver
+/// walls around whatever is inside), flat normals.
+pub fn room(s: Vec3) -> MeshGeometry {
+    let mut g = cuboid(s);
+    for p in &mut g.positions {
+        p.y += s.y * 0.5;
+    }
+    if let Some(normals) = g.normals.as_mut() {
+        for nrm in normals {
+            *nrm = -*nrm;
+        }
+    }
+    for t in &mut g.indices {
+        t.swap(1, 2);
+    }
+    g
+}

@@ -2,6 +2,7 @@
 //! (`assets/scenes/*.gltf`) and turned straight into a traceable scene by the CPU tests, so the
 //! analytic checks and the glTF the renderer loads come from one description.
 
+pub mod closed;
 pub mod cornell;
 pub mod geometry;
 pub mod gltf;
@@ -136,7 +137,7 @@ pub fn shine_along(dir: Vec3) -> Quat {
 }
 
 impl SceneDesc {
-    fn new(name: &str, camera: CameraDesc) -> Self {
+    pub(crate) fn new(name: &str, camera: CameraDesc) -> Self {
         Self {
             name: name.into(),
             meshes: vec![],
@@ -245,7 +246,7 @@ impl SceneDesc {
 }
 
 /// Grey diffuse floor material.
-fn diffuse(albedo: f32) -> MaterialParams {
+pub(crate) fn diffuse(albedo: f32) -> MaterialParams {
     MaterialParams {
         base_color: Vec3::splat(albedo),
         metallic: 0.0,

@@ -1,6 +1,7 @@
 //! The stiff-and-extreme-case scenes (issue: error against run time): table-driven variants
 //! of the test scenes that every technique must survive with finite output, no panic and no
-//! energy created. The checks specific to each case live in the tests.
+//! energy created. The checks specific to each case live in the tests; the gem's is a closed
+//! form (every technique's receivers get the power that strikes it).
 
 use std::sync::Arc;
 
@@ -40,15 +41,6 @@ pub fn scaled(mut d: SceneDesc, s: f32) -> SceneDesc {
         n.scale *= s;
     }
     d.camera.translation *= s;
-    d
-}
-
-/// A faceted IOR 2.4 "diamond" (a coarse sphere): many total internal reflections.
-pub fn gem() -> SceneDesc {
-    let mut d = glass_sphere();
-    d.name = "gem".into();
-    d.meshes[1] = Arc::new(geometry::uv_sphere(0.5, 8, 4));
-    d.materials[1].params.ior = 2.4;
     d
 }
 
@@ -117,9 +109,11 @@ pub fn cases() -> Vec<StiffCase> {
     ] {
         v.push(case(name, slab_ior(ior), 40_000, 32));
     }
+    // A brilliant in a closed room of receivers: the walls must get exactly the power that
+    // strikes the gem (super::closed), so this case checks energy, not only finiteness.
     v.push(case(
         "total internal reflection paths (IOR 2.4 gem)",
-        gem(),
+        super::closed::gem_room(),
         40_000,
         32,
     ));

@@ -1,0 +1,27 @@
+//! The converged reference images cached in `assets/reference/` (made by `examples/report.rs`,
+//! read by the GPU tests and the report): how they are made, written next to each image as a
+//! JSON recipe, so a cache made by other settings is recognised as stale.
+
+use super::TraceSettings;
+
+/// Photons per light of a converged reference.
+pub const CONVERGED_PHOTONS: u64 = 1 << 23;
+/// Seed of a converged reference (other renders use other seeds, so their noise is independent).
+pub const CONVERGED_SEED: u64 = 1;
+
+/// The recipe of the converged reference of `scene` at `size²`: photons, seed and every
+/// tracer setting that changes the result (the path cap and the roulette depth of
+/// [`TraceSettings::default`]).
+pub fn converged_recipe(scene: &str, size: u32) -> serde_json::Value {
+    let t = TraceSettings::default();
+    serde_json::json!({
+        "scene": scene,
+        "width": size,
+        "height": size,
+        "photons_per_light": CONVERGED_PHOTONS,
+        "seed": CONVERGED_SEED,
+        "technique": "reference",
+        "max_specular_events": t.max_specular_events,
+        "roulette_depth": t.roulette_depth,
+    })
+}

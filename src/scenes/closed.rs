@@ -1,0 +1,136 @@
+//! Closed-form energy scenes (issue: accuracy where light bounces many times). A caster that
+//! absorbs nothing, inside a room whose six walls are all receivers, must hand every watt that
+//! strikes it to the walls: `caustic power on the walls = power striking the caster`, whatever
+//! the number of internal reflections. No path cap passes that by luck. And an absorbing slab
+//! under a perpendicular sun passes `E A (1 - R)^2 T / (1 - R^2 T^2)` to the floor (Beer-Lambert
+//! along the slab, every even number of internal reflections).
+
+use glam::Vec3;
+
+use super::{
+    CameraDesc, LightDesc, LightKind, SUN_LUX, SceneDesc, diffuse, geometry, glass, look_at,
+    shine_along,
+};
+use crate::scene::MaterialParams;
+
+/// Size of the closed room, metres (x, y, z), standing on y = 0.
+pub const ROOM: Vec3 = Vec3::new(4.0, 3.0, 4.0);
+/// Centre of the caster in the room.
+pub const CASTER_AT: Vec3 = Vec3::new(0.0, 1.2, 0.0);
+
+fn room_scene(
+    name: &str,
+    caster: crate::scene::MeshGeometry,
+    ior: f32,
+    light: LightDesc,
+) -> SceneDesc {
+    let eye = Vec3::new(1.6, 2.4, 1.6);
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.0, 0.6, 0.0)),
+        fov_y: 70f32.to_radians(),
+    };
+    let mut s = SceneDesc::new(name, cam);
+    let walls = s.material("walls", diffuse(0.8), false);
+    let g = s.material("glass", glass(ior, 1.0), false);
+    s.add("room", geometry::room(ROOM), walls, Vec3::ZERO);
+    s.add("caster", caster, g, CASTER_AT);
+    s.lights.push(light);
+    s
+}
+
+/// A round brilliant (girdle radius 0.5 m, IOR 2.4) in a closed room, lit from above by a spot
+/// whose cone just holds the gem: most light entering the crown is totally reflected by the
+/// pavilion, many paths take dozens of internal reflections.
+pub fn gem_room() -> SceneDesc {
+    let at = CASTER_AT + Vec3::new(0.3, 1.4, 0.2);
+    room_scene(
+        "gem_room",
+        geometry::brilliant(0.5),
+        2.4,
+        LightDesc {
+            name: "spot".into(),
+            kind: LightKind::Spot {
+                candela: 20_000.0,
+                inner: 0.25,
+                outer: 0.4,
+            },
+            color: Vec3::ONE,
+            translation: at,
+            rotation: shine_along((CASTER_AT - at).normalize()),
+        },
+    )
+}
+
+/// A smooth ball (radius 0.5 m, IOR 4.0: 36 % reflected at normal incidence) in a closed room
+/// lit by a point light.
+pub fn ball_room() -> SceneDesc {
+    room_scene(
+        "ball_room",
+        geometry::uv_sphere(0.5, 64, 32),
+        4.0,
+        LightDesc {
+            name: "bulb".into(),
+            kind: LightKind::Point { candela: 20_000.0 },
+            color: Vec3::ONE,
+            translation: CASTER_AT + Vec3::new(-0.6, 1.3, 0.4),
+            rotation: glam::Quat::IDENTITY,
+        },
+    )
+}
+
+/// Thickness of [`absorbing_slab`], metres.
+pub const ABSORBING_THICKNESS: f32 = 0.2;
+/// Colour [`absorbing_slab`] keeps after [`ABSORBING_DISTANCE`] metres.
+pub const ABSORBING_COLOR: Vec3 = Vec3::new(0.3, 0.6, 0.9);
+/// Attenuation distance of [`absorbing_slab`], metres.
+pub const ABSORBING_DISTANCE: f32 = 0.25;
+/// IOR of [`absorbing_slab`].
+pub const ABSORBING_IOR: f32 = 1.5;
+
+/// A 1 x 0.2 x 1 m slab of coloured glass (IOR 1.5, Beer-Lambert) at y in [0.9, 1.1] under a
+/// vertical sun of [`SUN_LUX`] over a floor.
+pub fn absorbing_slab() -> SceneDesc {
+    let eye = Vec3::new(0.6, 3.0, 3.0);
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.0, 0.0, 0.0)),
+        fov_y: 45f32.to_radians(),
+    };
+    let mut s = SceneDesc::new("absorbing_slab", cam);
+    let grey = s.material("floor", diffuse(0.8), false);
+    let g = s.material(
+        "coloured_glass",
+        MaterialParams {
+            attenuation_color: ABSORBING_COLOR,
+            attenuation_distance: ABSORBING_DISTANCE,
+            ..glass(ABSORBING_IOR, ABSORBING_THICKNESS)
+        },
+        false,
+    );
+    s.add("floor", geometry::quad(10.0, 10.0), grey, Vec3::ZERO);
+    s.add(
+        "slab",
+        geometry::cuboid(Vec3::new(1.0, ABSORBING_THICKNESS, 1.0)),
+        g,
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+    s.lights.push(LightDesc {
+        name: "sun".into(),
+        kind: LightKind::Directional { lux: SUN_LUX },
+        color: Vec3::ONE,
+        translation: Vec3::new(0.0, 4.0, 0.0),
+        rotation: shine_along(Vec3::NEG_Y),
+    });
+    s
+}
+
+/// The power the floor receives under [`absorbing_slab`], per channel (lm): the slab's top
+/// face (1 m²) at [`SUN_LUX`], Fresnel `R` at normal incidence on each face, internal
+/// transmittance `T = c^(t / d)` per crossing, and every even number of internal reflections:
+/// `E A (1 - R)^2 T / (1 - R^2 T^2)`.
+pub fn absorbing_slab_power() -> Vec3 {
+    let r = crate::optics::fresnel_dielectric(1.0, 1.0 / ABSORBING_IOR);
+    let t = crate::optics::beer_lambert(ABSORBING_COLOR, ABSORBING_DISTANCE, ABSORBING_THICKNESS);
+    SUN_LUX * (1.0 - r) * (1.0 - r) * t / (Vec3::ONE - r * r * t * t)
+}
