@@ -12,6 +12,8 @@ static GPU: Mutex<()> = Mutex::new(());
 
 #[path = "gpu/aaps.rs"]
 mod aaps;
+#[path = "gpu/energy.rs"]
+mod energy;
 #[path = "gpu/twins.rs"]
 mod twins;
 #[path = "gpu/volume.rs"]
@@ -152,6 +154,9 @@ fn composite_adds_albedo_over_pi_times_irradiance() {
         report.exposure
     );
     assert!(checked > 300, "too few caustic pixels: {checked}");
+    // Where the caustic is a sizeable part of the pixel, the composite's contribution is exact
+    // to the f16 target's rounding (measured 8.0e-3).
+    assert!(worst < 0.02, "worst relative error {worst:.2e}");
     println!("composite pass: {:?} ({})", report.pass_ms, report.timing);
 }
 
@@ -398,7 +403,9 @@ fn bad_input_warns_once_and_renders() {
 }
 
 static RSS: Mutex<Vec<(u32, u64, usize)>> = Mutex::new(Vec::new());
-static CHURN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// 0: the baseline (no caustics components), 1: the churn with the reference technique, 2: the
+/// churn with the technique cycling.
+static CHURN: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
 const CHURN_FRAMES: u32 = 1000;
 
 fn rss_bytes() -> u64 {
@@ -413,13 +420,20 @@ fn rss_bytes() -> u64 {
 
 /// Adding and removing lights, casters and volumes every frame for 1000 frames: no panic, no
 /// validation error, finite output, bounded plugin state, and no memory growth beyond that of
-/// the same entity churn without the caustics components.
+/// the same entity churn without the caustics components. Then the same churn again while the
+/// camera's technique cycles through AAPS, the reference and volumes every 50 frames, so every
+/// technique dispatches under it: no panic, no validation error, finite output, bounded BLAS
+/// cache, each technique's passes ran.
 ///
 /// Why a baseline: Bevy 0.19 on lavapipe itself grows about 0.85 MiB per frame in every scene,
 /// about 4.5 MiB per frame while a transmissive material is on screen and about 0.3 MiB per new
 /// mesh asset drawn, with or without this plugin (measured with the plugin's passes and
 /// gathering disabled). So the churn uses opaque meshes made glass by `CausticMaterial`, and
 /// the baseline run spawns the same meshes and lights without any caustics component.
+///
+/// The memory bound is asserted on the reference churn only: under the cycling churn the
+/// process grows faster (about 2 MiB per frame with AAPS, measured; printed here) and the cause
+/// (ours, wgpu's or lavapipe's) is not found yet.
 #[test]
 fn churn_for_a_thousand_frames() {
     use bevy::prelude::*;
@@ -434,6 +448,16 @@ fn churn_for_a_thousand_frames() {
     struct Churn;
     fn per_frame(world: &mut World, n: u32) {
         {
+            use bevy_caustics::{Caustics, CausticsTechnique as T};
+            // Ends on the reference (frame 999 is in segment 19), whose image the job reads.
+            let technique = [T::Aaps, T::Reference, T::Volume][(n / 50 % 3) as usize];
+            if CHURN.load(Ordering::Relaxed) == 2 {
+                for mut c in world.query::<&mut Caustics>().iter_mut(world) {
+                    if c.technique != technique {
+                        c.technique = technique;
+                    }
+                }
+            }
             if n.is_multiple_of(2) {
                 // A new mesh asset every time: its BLAS must be built and later dropped.
                 let mesh = world
@@ -460,15 +484,19 @@ fn churn_for_a_thousand_frames() {
                         Transform::from_xyz(2.0, 2.0, 0.0),
                     ))
                     .id();
-                if CHURN.load(Ordering::Relaxed) {
+                if CHURN.load(Ordering::Relaxed) > 0 {
                     world.entity_mut(caster).insert(CausticMaterial::glass(1.5));
                     world.entity_mut(light).insert(CausticLight::default());
+                    // Around the caster, entry face (+Y) towards the light above it.
                     world.spawn((
                         Churn,
                         CausticsVolume {
-                            slabs: 1 + n % 64,
+                            slabs: 1 + n % 8,
+                            gbuffer_resolution: 64,
+                            projector_resolution: 64,
                             ..default()
                         },
+                        Transform::from_xyz(2.0, 1.0, 0.0),
                     ));
                 }
             } else {
@@ -487,7 +515,7 @@ fn churn_for_a_thousand_frames() {
         }
     }
     let mut growth = Vec::new();
-    for churn in [false, true] {
+    for churn in [0, 1, 2] {
         CHURN.store(churn, Ordering::Relaxed);
         RSS.lock().unwrap().clear();
         let report = run(RenderJob {
@@ -502,7 +530,19 @@ fn churn_for_a_thousand_frames() {
         })
         .expect("render");
         let rss = RSS.lock().unwrap().clone();
-        println!("churn {churn}: rss and cached BLAS at frames {rss:?}");
+        println!(
+            "churn {churn}: rss and cached BLAS at frames {rss:?}, passes {:?}",
+            report.passes
+        );
+        if churn == 2 {
+            for pass in ["caustics/aaps/trace", "caustics/volume/project"] {
+                assert!(
+                    report.passes.iter().any(|p| p == pass),
+                    "{pass} never ran under the churn: {:?}",
+                    report.passes
+                );
+            }
+        }
         assert_eq!(rss.len(), 2);
         assert!(rss.iter().all(|r| r.2 <= 4), "BLAS cache grows: {rss:?}");
         assert!(report.caustics.unwrap().all_finite());
@@ -512,9 +552,10 @@ fn churn_for_a_thousand_frames() {
     }
     let mib = |b: f64| b / 1048576.0;
     println!(
-        "memory growth frames 200-999: without churn {:.1} MiB, with churn {:.1} MiB",
+        "memory growth frames 200-999: without churn {:.1} MiB, with churn {:.1} MiB, with churn and the technique cycling {:.1} MiB",
         mib(growth[0]),
-        mib(growth[1])
+        mib(growth[1]),
+        mib(growth[2])
     );
     // A leaked BLAS (about 0.3 MiB for this sphere) per add would cost 120 MiB over 400 adds.
     assert!(
@@ -562,12 +603,23 @@ fn stiff_and_extreme_cases_gpu() {
         })
         .unwrap_or_else(|e| panic!("{} (aaps): {e}", case.name));
         println!("{:<48} aaps {:?}", case.name, aaps.aaps);
+        let gem = case.name == "total internal reflection paths (IOR 2.4 gem)";
+        // The gem sits in a closed room of receivers: walls = power on the gem.
+        let on_gem = gem.then(|| energy::reference_power(&desc).0);
+        if gem {
+            let c = aaps.aaps.as_ref().expect("AAPS counters");
+            let err = c.flux_deposited / c.flux_on_casters - 1.0;
+            println!("{:<48} aaps energy {:+.2} %", case.name, err * 100.0);
+            assert!(err.abs() < 0.03, "gem (aaps): {:+.2} %", err * 100.0);
+        }
         assert!(
             aaps.caustics.as_ref().unwrap().all_finite(),
             "{} (aaps): non-finite caustics",
             case.name
         );
-        // And caustics volumes (one fitted per light, 3 slabs).
+        // And caustics volumes (one fitted per light, 3 slabs; the gem's energy check needs
+        // G-buffers that resolve its facets: 200², the CLI default).
+        let g = if gem { 200 } else { 64 };
         let vol = run(RenderJob {
             scene: dir.join(format!("stiff_{i}.gltf")),
             technique: bevy_caustics::CausticsTechnique::Volume,
@@ -576,8 +628,8 @@ fn stiff_and_extreme_cases_gpu() {
             frames: 4,
             volume: bevy_caustics::CausticsVolume {
                 photons: case.photons.min(1 << 16) as i32,
-                gbuffer_resolution: 64,
-                projector_resolution: 64,
+                gbuffer_resolution: g,
+                projector_resolution: g,
                 ..Default::default()
             },
             ..Default::default()
@@ -589,12 +641,16 @@ fn stiff_and_extreme_cases_gpu() {
             "{} (volume): non-finite caustics",
             case.name
         );
-        if let Some(c) = &vol.volume {
-            assert!(
-                c.splatted_lm <= c.entered_lm * (1.0 + 1e-5),
-                "{}: {c:?}",
-                case.name
-            );
+        let c = vol.volume.as_ref().expect("volume counters");
+        assert!(
+            c.splatted_lm <= c.entered_lm * (1.0 + 1e-5),
+            "{}: {c:?}",
+            case.name
+        );
+        if let Some(on_gem) = on_gem {
+            let err = c.splatted_lm / on_gem - 1.0;
+            println!("{:<48} volume energy {:+.2} %", case.name, err * 100.0);
+            assert!(err.abs() < 0.10, "gem (volume): {:+.2} %", err * 100.0);
         }
         let report = run(RenderJob {
             scene: dir.join(format!("stiff_{i}.gltf")),

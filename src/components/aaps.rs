@@ -52,8 +52,10 @@ pub struct AapsSettings {
     /// Largest ratio of a splat's axes (section 3.1.2: "anisotropy is limited"). Default 16
     /// (ours). At least 1.
     pub max_anisotropy: f32,
-    /// Specular interactions followed per photon before it is dropped. Default 8 (ours).
-    /// Range [1, 32].
+    /// Specular interactions followed per photon before it is dropped (its flux is counted as
+    /// in flight at the cap). Default 64 (ours: a brilliant-cut IOR 2.4 gem in a closed room of
+    /// receivers keeps all but 0.7 % of the power that strikes it; the reference tracer loses
+    /// 5.9 % at 16). Range [1, 128]. Cost: only the paths that bounce that often pay for it.
     pub max_bounces: u32,
     /// Capacity of the splat buffer, splats. Default 2 097 152 (128 MiB). Splats past it are
     /// counted as overflow and not drawn.
@@ -77,7 +79,7 @@ impl Default for AapsSettings {
             msaa_threshold: 4.0,
             splat_scale: 1.5,
             max_anisotropy: 16.0,
-            max_bounces: 8,
+            max_bounces: 64,
             splat_capacity: 1 << 21,
             adaptive: true,
         }
@@ -107,7 +109,7 @@ impl AapsSettings {
             msaa_threshold: finite(self.msaa_threshold, 0.0).max(0.0),
             splat_scale: finite(self.splat_scale, 1.5).clamp(0.1, 16.0),
             max_anisotropy: finite(self.max_anisotropy, 16.0).max(1.0),
-            max_bounces: self.max_bounces.clamp(1, 32),
+            max_bounces: self.max_bounces.clamp(1, 128),
             splat_capacity: self.splat_capacity.clamp(1, 1 << 24),
             adaptive: self.adaptive,
         }

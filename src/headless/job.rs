@@ -171,6 +171,19 @@ pub struct AapsCounters {
     pub photon_overflow: u64,
     /// Photons split at a dielectric.
     pub splits: u64,
+    /// Luminous flux striking the casters (photons' first hits), lm (or W weighted by
+    /// luminance).
+    pub flux_on_casters: f64,
+    /// Luminous flux reaching diffuse surfaces after a specular path, in view or not, before
+    /// any culling.
+    pub flux_deposited: f64,
+    /// Luminous flux still in flight when a path reached `max_bounces`.
+    pub flux_max_depth: f64,
+    /// Non-zero words in the last splat inside the splat buffer's capacity (16 when it holds a
+    /// splat).
+    pub splat_last_words: u64,
+    /// Non-zero words in the splat buffer's guard region past its capacity (written past it).
+    pub splat_guard_written: u64,
 }
 
 #[derive(Resource, Clone)]
@@ -688,6 +701,13 @@ fn drive(
                 o.report.caustics = Some(snap.image);
             } else if let Some(snap) = o.snapshot.take() {
                 let c = |i: usize| snap.counters[i] as u64;
+                let nonzero = |w: &[u32]| w.iter().filter(|&&x| x != 0).count() as u64;
+                // Four f32 words from `i` (`C_FLUX_*` in common.wgsl), summed.
+                let f4 = |i: usize| -> f64 {
+                    (i..i + 4)
+                        .map(|k| f32::from_bits(snap.counters[k]) as f64)
+                        .sum()
+                };
                 o.report.photons_traced = c(1);
                 o.report.photons_in_view = c(3) + c(4);
                 o.report.aaps = Some(AapsCounters {
@@ -705,6 +725,11 @@ fn drive(
                     tir: c(13),
                     photon_overflow: c(14),
                     splits: c(15),
+                    flux_on_casters: f4(16),
+                    flux_deposited: f4(20),
+                    flux_max_depth: f4(24),
+                    splat_last_words: nonzero(&snap.splat_guard[..16]),
+                    splat_guard_written: nonzero(&snap.splat_guard[16..]),
                 });
                 o.report.caustics = Some(snap.image);
             } else if job.0.technique != CausticsTechnique::Reference {

@@ -140,7 +140,8 @@ impl SumQuadtree {
 }
 
 /// Where sample `sample` of a leaf with `count` samples (a square `k x k`) lies in the unit
-/// square of the whole texture: on a `k x k` grid of cell centres inside `texel`.
+/// square of the whole texture: on a `k x k` grid of cell centres inside `texel`. WGSL twin
+/// `quadtree_leaf_sample_uv` (`src/render/quadtree.wgsl`), used by the trace pass.
 pub fn leaf_sample_uv(texel: UVec2, sample: u32, count: u32, size: u32) -> Vec2 {
     let k = (count.max(1) as f32).sqrt().round().max(1.0) as u32;
     let (i, j) = (sample % k, (sample / k).min(k - 1));

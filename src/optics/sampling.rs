@@ -120,3 +120,21 @@ pub fn spot_attenuation(cos_angle: f32, inner_angle: f32, outer_angle: f32) -> f
     let a = (cos_angle * scale + offset).clamp(0.0, 1.0);
     a * a
 }
+
+/// A stateless 32-bit hash (PCG-RXS-M-XS, Jarzynski and Olano 2020, "Hash Functions for GPU
+/// Rendering"): one GPU thread's random decision without a stored generator. WGSL twin
+/// `optics_pcg_hash` (`src/render/optics.wgsl`), tested bit for bit.
+#[inline]
+pub fn pcg_hash(x: u32) -> u32 {
+    let state = x.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+/// A uniform number in [0, 1) for the pair `(a, b)` (e.g. photon and bounce): the top 24 bits
+/// of `pcg_hash(a ^ pcg_hash(b))`, exact in f32. AAPS's Fresnel choice after its one split
+/// (seed 004 section 3.3.1, extended). WGSL twin `optics_hash_unit`.
+#[inline]
+pub fn hash_unit(a: u32, b: u32) -> f32 {
+    (pcg_hash(a ^ pcg_hash(b)) >> 8) as f32 * (1.0 / 16_777_216.0)
+}

@@ -98,6 +98,18 @@ fn optics_beer_lambert(color: vec3<f32>, dist: f32, len: f32) -> vec3<f32> {
     return pow(c, vec3(x));
 }
 
+// pcg_hash (src/optics/sampling.rs): PCG-RXS-M-XS, Jarzynski and Olano 2020.
+fn optics_pcg_hash(x: u32) -> u32 {
+    let state = x * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// hash_unit (src/optics/sampling.rs): uniform in [0, 1) for the pair (a, b).
+fn optics_hash_unit(a: u32, b: u32) -> f32 {
+    return f32(optics_pcg_hash(a ^ optics_pcg_hash(b)) >> 8u) * (1.0 / 16777216.0);
+}
+
 // spot_attenuation (src/optics/sampling.rs), with the cosines precomputed.
 fn optics_spot_attenuation(cos_angle: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     let scale = 1.0 / max(cos_inner - cos_outer, 1.0e-4);

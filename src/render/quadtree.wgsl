@@ -1,6 +1,14 @@
 // The AAPS task-buffer quadtree walk: WGSL twin of `SumQuadtree::walk` (src/optics/aaps.rs),
 // tested against it on lavapipe (tests/gpu.rs, wgsl_quadtree_walk_matches_rust).
 
+// leaf_sample_uv (src/optics/aaps.rs): sample `sample` of a leaf of `count` samples (a
+// k x k grid of cell centres) in texel `texel` of a `size x size` texture.
+fn quadtree_leaf_sample_uv(texel: vec2<u32>, sample: u32, count: u32, size: u32) -> vec2<f32> {
+    let k = max(u32(round(sqrt(f32(max(count, 1u))))), 1u);
+    let cell = vec2(f32(sample % k), f32(min(sample / k, k - 1u))) + 0.5;
+    return (vec2<f32>(texel) + cell / f32(k)) / f32(max(size, 1u));
+}
+
 // Read-write so the AAPS build passes can share the binding (group 0, binding 7).
 @group(0) @binding(7) var<storage, read_write> qt_levels: array<u32>;
 

@@ -14,7 +14,7 @@ use bevy::render::render_resource::{
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
-use super::aaps::view::AapsViewState;
+use super::aaps::view::{AapsViewState, SPLAT_GUARD_SPLATS};
 use super::volume::gpu::CNT;
 use super::volume::view::{VolumeStore, VolumeViewState};
 use super::{ExtractedCaustics, ViewCausticsBuffer};
@@ -22,6 +22,9 @@ use crate::reference::CausticImage;
 
 /// Number of AAPS counter words read back (`C_*` in src/render/aaps/common.wgsl).
 pub const COUNTER_WORDS: usize = 32;
+/// Words of the AAPS splat buffer's tail read back (after the counters): the last splat inside
+/// the capacity, then the guard region past it.
+pub const GUARD_WORDS: usize = (1 + SPLAT_GUARD_SPLATS as usize) * 16;
 
 #[derive(Default)]
 struct State {
@@ -36,6 +39,10 @@ pub struct CausticsSnapshot {
     pub image: CausticImage,
     /// The AAPS counters of the same frame (zeros for other techniques).
     pub counters: [u32; COUNTER_WORDS],
+    /// The AAPS splat buffer's tail: its last splat inside the capacity (16 words), then the
+    /// guard region past it (zeros unless something wrote past the capacity). Zeros for other
+    /// techniques.
+    pub splat_guard: [u32; GUARD_WORDS],
 }
 
 /// Shared between the main and render worlds.
@@ -69,12 +76,17 @@ impl CausticsReadback {
                 image.data[y * w + x] = Vec3::new(f(at), f(at + 4), f(at + 8));
             }
         }
-        let mut counters = [0u32; COUNTER_WORDS];
-        for (i, c) in counters.iter_mut().enumerate() {
+        let word = |i: usize| {
             let at = row * h + 4 * i;
-            *c = u32::from_le_bytes(data[at..at + 4].try_into().unwrap());
-        }
-        Some(CausticsSnapshot { image, counters })
+            u32::from_le_bytes(data[at..at + 4].try_into().unwrap())
+        };
+        let counters = std::array::from_fn(word);
+        let splat_guard = std::array::from_fn(|i| word(COUNTER_WORDS + i));
+        Some(CausticsSnapshot {
+            image,
+            counters,
+            splat_guard,
+        })
     }
 }
 
@@ -101,7 +113,7 @@ fn copy_for_readback(
     let image_bytes = row as u64 * buffer.size.y as u64;
     let staging = ctx.render_device().create_buffer(&BufferDescriptor {
         label: Some("caustics:readback"),
-        size: image_bytes + (COUNTER_WORDS * 4) as u64,
+        size: image_bytes + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64,
         usage: BufferUsages::MAP_READ | BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -134,6 +146,13 @@ fn copy_for_readback(
             &staging,
             image_bytes,
             Some((COUNTER_WORDS * 4) as u64),
+        );
+        encoder.copy_buffer_to_buffer(
+            &state.splats,
+            (state.key.splat_capacity as u64 - 1) * 64,
+            &staging,
+            image_bytes + (COUNTER_WORDS * 4) as u64,
+            Some((GUARD_WORDS * 4) as u64),
         );
     }
     // The volume technique: the counters of the view's first visible volume.

@@ -183,3 +183,22 @@ fn aaps_settings_are_sanitized() {
         "a clamped value is valid"
     );
 }
+
+/// The splat capacity fits the device's binding with the guard region after it (the guard
+/// catches writes past the capacity, `aaps_splat_buffer_overflow_is_counted`).
+#[test]
+fn splat_capacity_fits_the_binding_with_its_guard() {
+    use bevy::render::render_resource::WgpuLimits;
+    use bevy_caustics::render::aaps::view::{SPLAT_GUARD_SPLATS, splat_capacity};
+    let limits = WgpuLimits::default();
+    let max = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let default = bevy_caustics::AapsSettings::default().splat_capacity;
+    let cap = splat_capacity(default, &limits);
+    assert!((cap as u64 + SPLAT_GUARD_SPLATS) * 64 <= max);
+    assert_eq!(cap as u64, max / 64 - SPLAT_GUARD_SPLATS);
+    assert_eq!(splat_capacity(64, &limits), 64);
+    assert_eq!(splat_capacity(0, &limits), 1);
+    assert_eq!(splat_capacity(u32::MAX, &limits), cap);
+}

@@ -235,10 +235,11 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
     if i >= arrayLength(&outputs) / 4u { return; }
     let a = inputs[2u * i];
     let b = inputs[2u * i + 1u];
-    outputs[4u * i] = vec4(optics_fresnel_dielectric(a.w, b.w), f32(optics_floor_square(a.w * 40.0)), 0.0, 0.0);
+    let h = optics_pcg_hash(i * 2654435761u);
+    outputs[4u * i] = vec4(optics_fresnel_dielectric(a.w, b.w), f32(optics_floor_square(a.w * 40.0)), optics_hash_unit(i, i * 7u + 3u), 0.0);
     outputs[4u * i + 1u] = optics_refract(a.xyz, b.xyz, b.w);
-    outputs[4u * i + 2u] = vec4(optics_reflect(a.xyz, b.xyz), 0.0);
-    outputs[4u * i + 3u] = vec4(optics_equal_area_square_to_sphere(vec2(a.w, b.w / 4.0)), 0.0);
+    outputs[4u * i + 2u] = vec4(optics_reflect(a.xyz, b.xyz), f32(h & 0xffffffu));
+    outputs[4u * i + 3u] = vec4(optics_equal_area_square_to_sphere(vec2(a.w, b.w / 4.0)), f32(h >> 8u));
 }
 "#;
     let src = format!("{}\n{kernel}", include_str!("../../src/render/optics.wgsl"));
@@ -298,6 +299,11 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
         let r = reflect(*d, *n);
         worst[2] = worst[2].max((v(e + 2) - r).length());
         assert!((v(e + 2) - r).length() < 1e-5);
+        // Bit for bit: the hash (low and high 24 bits, exact in f32) and the uniform from it.
+        let (iu, h) = (i as u32, pcg_hash((i as u32).wrapping_mul(2654435761)));
+        assert_eq!(f(4 * (e + 2) + 3), (h & 0xff_ffff) as f32, "pcg_hash({i})");
+        assert_eq!(f(4 * (e + 3) + 3), (h >> 8) as f32, "pcg_hash({i})");
+        assert_eq!(f(4 * e + 2), hash_unit(iu, iu * 7 + 3), "hash_unit({i})");
         let m = equal_area_square_to_sphere(glam::Vec2::new(*c, eta / 4.0));
         worst[3] = worst[3].max((v(e + 3) - m).length());
         assert!(
@@ -329,12 +335,15 @@ fn wgsl_quadtree_walk_matches_rust() {
 @group(0) @binding(8) var<storage, read_write> walks: array<vec4<u32>>;
 @compute @workgroup_size(64)
 fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= arrayLength(&walks) { return; }
-    walks[id.x] = quadtree_walk(32u, id.x);
+    if id.x >= arrayLength(&walks) / 2u { return; }
+    let w = quadtree_walk(32u, id.x);
+    walks[2u * id.x] = w;
+    walks[2u * id.x + 1u] = vec4(bitcast<vec2<u32>>(quadtree_leaf_sample_uv(w.xy, w.z, w.w, 32u)), 0u, 0u);
 }
 "#;
     let src = format!(
-        "{}\n{kernel}",
+        "{}\n{}\n{kernel}",
+        include_str!("../../src/render/optics.wgsl"),
         include_str!("../../src/render/quadtree.wgsl")
     );
     let size = 32u32;
@@ -350,23 +359,38 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
         .flat_map(|v| v.to_le_bytes())
         .collect();
     let n = tree.total() as usize + 100;
-    let data = run_compute(&src, "walk_test", 7, &[flat], n);
+    let data = run_compute(&src, "walk_test", 7, &[flat], 2 * n);
     let u = |i: usize| u32::from_le_bytes(data[4 * i..4 * i + 4].try_into().unwrap());
+    let mut worst_uv = 0.0f32;
     for task in 0..n {
         let gpu = [
-            u(4 * task),
-            u(4 * task + 1),
-            u(4 * task + 2),
-            u(4 * task + 3),
+            u(8 * task),
+            u(8 * task + 1),
+            u(8 * task + 2),
+            u(8 * task + 3),
         ];
         match tree.walk(task as u32) {
             Some((texel, sample, count)) => {
-                assert_eq!(gpu, [texel.x, texel.y, sample, count], "task {task}")
+                assert_eq!(gpu, [texel.x, texel.y, sample, count], "task {task}");
+                // The sample position in the texel (leaf_sample_uv).
+                let uv = glam::Vec2::new(
+                    f32::from_bits(u(8 * task + 4)),
+                    f32::from_bits(u(8 * task + 5)),
+                );
+                let want = bevy_caustics::optics::leaf_sample_uv(texel, sample, count, size);
+                worst_uv = worst_uv.max((uv - want).abs().max_element());
+                assert!(
+                    (uv - want).abs().max_element() < 1e-6,
+                    "task {task}: uv {uv} vs {want}"
+                );
             }
             None => assert_eq!(gpu[3], 0, "task {task} past the total"),
         }
     }
-    println!("quadtree walk: {} tasks match", tree.total());
+    println!(
+        "quadtree walk: {} tasks match, leaf sample uv worst |difference| {worst_uv:.1e}",
+        tree.total()
+    );
 }
 
 /// The WGSL twins the AAPS passes use (`src/render/optics.wgsl`): Schlick, Beer-Lambert, spot

@@ -47,6 +47,9 @@ const C_DENSITY_SUM: u32 = 12u;   // f32 bits: sum of the new densities
 const C_TIR: u32 = 13u;           // total internal reflections
 const C_PHOTON_OVERFLOW: u32 = 14u; // photons past the photon capacity
 const C_SPLIT: u32 = 15u;         // photons split at a dielectric
+const C_FLUX_CASTER: u32 = 16u;   // 4 words, f32 bits: luminous flux striking casters (first hit)
+const C_FLUX_DEPOSITED: u32 = 20u; // 4 words, f32 bits: flux reaching a diffuse surface (before culling)
+const C_FLUX_MAX_DEPTH: u32 = 24u; // 4 words, f32 bits: flux in flight at max bounces
 const ACCUM_TEXELS: u32 = 32u;    // per texel: area sum (f32 bits), accepted count, variance (f32 bits), 0
 
 fn accum_add_f32(i: u32, v: f32) {

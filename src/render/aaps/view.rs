@@ -17,6 +17,21 @@ use crate::render::{CAUSTICS_BUFFER_FORMAT, ExtractedCaustics};
 
 /// Bytes of the `accum` buffer before the per-texel entries (`ACCUM_TEXELS` words).
 pub const ACCUM_HEADER_WORDS: u64 = 32;
+/// Splats (64 bytes each) of zeros after the splat buffer's capacity, inside its binding: a
+/// write past the capacity would land there, and the headless readback checks it stays zero
+/// (every splat the trace writes has a non-zero irradiance).
+pub const SPLAT_GUARD_SPLATS: u64 = 4;
+/// The splat capacity the device can bind: the requested one, less what would push the buffer
+/// with its guard region past the storage-binding and buffer size limits (lavapipe: 128 MiB,
+/// so the default 2 097 152 splats become 2 097 148).
+pub fn splat_capacity(requested: u32, limits: &bevy::render::render_resource::WgpuLimits) -> u32 {
+    let max_bytes = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let max = (max_bytes / 64).saturating_sub(SPLAT_GUARD_SPLATS).max(1);
+    (requested as u64).clamp(1, max) as u32
+}
+
 /// Stride of the per-level quadtree uniforms (the minimum uniform offset alignment).
 pub const LEVEL_STRIDE: u64 = 256;
 
@@ -203,7 +218,7 @@ impl AapsViewState {
             splats: storage(
                 device,
                 "caustics:aaps:splats",
-                key.splat_capacity as u64 * 64,
+                (key.splat_capacity as u64 + SPLAT_GUARD_SPLATS) * 64,
                 BufferUsages::empty(),
             ),
             args: storage(device, "caustics:aaps:args", 64, BufferUsages::INDIRECT),
@@ -350,7 +365,7 @@ pub fn prepare_aaps_views(
         let (atlas, tile, per_row) = atlas_layout(settings.atlas_resolution, scene.lights);
         let key = StateKey {
             atlas: [atlas, tile, per_row, scene.lights],
-            splat_capacity: settings.splat_capacity,
+            splat_capacity: splat_capacity(settings.splat_capacity, &device.limits()),
             size,
             budget_per_light: caustics.photons_per_light,
             adaptive: settings.adaptive,
