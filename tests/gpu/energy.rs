@@ -37,6 +37,17 @@ pub(crate) fn reference_power(desc: &SceneDesc) -> (f64, f64) {
     )
 }
 
+/// The closed-form scenes with the closed form of the slab's floor power (luminance, lm); the
+/// rooms' closed form is the power striking the caster.
+fn cases() -> [(SceneDesc, Option<f64>); 3] {
+    let slab = bevy_caustics::optics::luminance(closed::absorbing_slab_power()) as f64;
+    [
+        (closed::gem_room(), None),
+        (closed::ball_room(), None),
+        (closed::absorbing_slab(), Some(slab)),
+    ]
+}
+
 fn aaps_run(desc: &SceneDesc) -> bevy_caustics::headless::AapsCounters {
     let report = run(RenderJob {
         scene: write(desc),
@@ -61,20 +72,10 @@ fn aaps_closed_form_energy() {
     if !require_gpu() {
         return;
     }
-    let slab = closed::absorbing_slab_power();
-    let slab_lum = (0.2126 * slab.x + 0.7152 * slab.y + 0.0722 * slab.z) as f64;
-    for desc in [
-        closed::gem_room(),
-        closed::ball_room(),
-        closed::absorbing_slab(),
-    ] {
+    for (desc, closed_form) in cases() {
         let (ref_on, ref_out) = reference_power(&desc);
         let c = aaps_run(&desc);
-        let expect = if desc.name == "absorbing_slab" {
-            slab_lum
-        } else {
-            c.flux_on_casters
-        };
+        let expect = closed_form.unwrap_or(c.flux_on_casters);
         let err = c.flux_deposited / expect - 1.0;
         let on_err = c.flux_on_casters / ref_on - 1.0;
         println!(
@@ -109,19 +110,8 @@ fn volume_closed_form_energy() {
     if !require_gpu() {
         return;
     }
-    let slab = closed::absorbing_slab_power();
-    let slab_lum = (0.2126 * slab.x + 0.7152 * slab.y + 0.0722 * slab.z) as f64;
-    for desc in [
-        closed::gem_room(),
-        closed::ball_room(),
-        closed::absorbing_slab(),
-    ] {
-        let (ref_on, _) = reference_power(&desc);
-        let expect = if desc.name == "absorbing_slab" {
-            slab_lum
-        } else {
-            ref_on
-        };
+    for (desc, closed_form) in cases() {
+        let expect = closed_form.unwrap_or_else(|| reference_power(&desc).0);
         let report = run(RenderJob {
             scene: write(&desc),
             technique: CausticsTechnique::Volume,
