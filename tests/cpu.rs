@@ -265,7 +265,7 @@ fn plane_edge_hit(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f64> {
         return None;
     }
     let t = n.dot(a - o) / den;
-    if !(t > 0.0) {
+    if t.is_nan() || t <= 0.0 {
         return None;
     }
     let p = o + d * t;
