@@ -186,6 +186,42 @@ pub struct AapsCounters {
     pub splat_guard_written: u64,
 }
 
+impl AapsCounters {
+    /// From a readback: the counter words (`C_*` in src/render/aaps/common.wgsl) and the splat
+    /// buffer's tail.
+    pub fn from_snapshot(snap: &crate::render::readback::CausticsSnapshot) -> Self {
+        let c = |i: usize| snap.counters[i] as u64;
+        let nonzero = |w: &[u32]| w.iter().filter(|&&x| x != 0).count() as u64;
+        // Four f32 words from `i` (`C_FLUX_*` in common.wgsl), summed.
+        let f4 = |i: usize| -> f64 {
+            (i..i + 4)
+                .map(|k| f32::from_bits(snap.counters[k]) as f64)
+                .sum()
+        };
+        Self {
+            tasks: c(0),
+            photons_emitted: c(1),
+            splats: c(3) + c(4),
+            splats_msaa: c(4),
+            splat_overflow: c(5),
+            culled_frustum: c(6),
+            culled_size: c(7),
+            dropped: c(8),
+            clamped: c(9),
+            nan_guards: c(10),
+            max_depth: c(11),
+            tir: c(13),
+            photon_overflow: c(14),
+            splits: c(15),
+            flux_on_casters: f4(16),
+            flux_deposited: f4(20),
+            flux_max_depth: f4(24),
+            splat_last_words: nonzero(&snap.splat_guard[..16]),
+            splat_guard_written: nonzero(&snap.splat_guard[16..]),
+        }
+    }
+}
+
 #[derive(Resource, Clone)]
 struct Job(RenderJob);
 
@@ -700,37 +736,10 @@ fn drive(
                 o.report.volume = Some(v);
                 o.report.caustics = Some(snap.image);
             } else if let Some(snap) = o.snapshot.take() {
-                let c = |i: usize| snap.counters[i] as u64;
-                let nonzero = |w: &[u32]| w.iter().filter(|&&x| x != 0).count() as u64;
-                // Four f32 words from `i` (`C_FLUX_*` in common.wgsl), summed.
-                let f4 = |i: usize| -> f64 {
-                    (i..i + 4)
-                        .map(|k| f32::from_bits(snap.counters[k]) as f64)
-                        .sum()
-                };
-                o.report.photons_traced = c(1);
-                o.report.photons_in_view = c(3) + c(4);
-                o.report.aaps = Some(AapsCounters {
-                    tasks: c(0),
-                    photons_emitted: c(1),
-                    splats: c(3) + c(4),
-                    splats_msaa: c(4),
-                    splat_overflow: c(5),
-                    culled_frustum: c(6),
-                    culled_size: c(7),
-                    dropped: c(8),
-                    clamped: c(9),
-                    nan_guards: c(10),
-                    max_depth: c(11),
-                    tir: c(13),
-                    photon_overflow: c(14),
-                    splits: c(15),
-                    flux_on_casters: f4(16),
-                    flux_deposited: f4(20),
-                    flux_max_depth: f4(24),
-                    splat_last_words: nonzero(&snap.splat_guard[..16]),
-                    splat_guard_written: nonzero(&snap.splat_guard[16..]),
-                });
+                let c = AapsCounters::from_snapshot(&snap);
+                o.report.photons_traced = c.photons_emitted;
+                o.report.photons_in_view = c.splats;
+                o.report.aaps = Some(c);
                 o.report.caustics = Some(snap.image);
             } else if job.0.technique != CausticsTechnique::Reference {
                 o.error
