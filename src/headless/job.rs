@@ -222,6 +222,25 @@ impl AapsCounters {
     }
 }
 
+/// This frame's GPU and CPU time of every caustics pass that recorded one, appended to
+/// `samples` under `"{pass}@gpu"` / `"{pass}@cpu"`.
+fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut BTreeMap<String, Vec<f64>>) {
+    for pass in std::iter::once(COMPOSITE_PASS)
+        .chain(crate::render::aaps::passes::ALL_PASSES)
+        .chain(crate::render::volume::passes::all_passes())
+    {
+        for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
+            let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
+            if let Some(v) = diagnostics.get(&path).and_then(|d| d.value()) {
+                samples
+                    .entry(format!("{pass}@{clock}"))
+                    .or_default()
+                    .push(v);
+            }
+        }
+    }
+}
+
 #[derive(Resource, Clone)]
 struct Job(RenderJob);
 
@@ -642,20 +661,7 @@ fn drive(
             let mut o = shared.0.lock().expect("state");
             // Diagnostics arrive a few frames late: sample after a warm-up.
             if n >= 3 {
-                for pass in std::iter::once(COMPOSITE_PASS)
-                    .chain(crate::render::aaps::passes::ALL_PASSES)
-                    .chain(crate::render::volume::passes::all_passes())
-                {
-                    for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
-                        let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
-                        if let Some(v) = diagnostics.get(&path).and_then(|d| d.value()) {
-                            o.pass_samples
-                                .entry(format!("{pass}@{clock}"))
-                                .or_default()
-                                .push(v);
-                        }
-                    }
-                }
+                sample_pass_times(&diagnostics, &mut o.pass_samples);
             }
             let frame: Vec<String> = log.take().into_iter().map(String::from).collect();
             for p in &frame {
