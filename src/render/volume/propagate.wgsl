@@ -42,14 +42,8 @@ fn count_add_f32(c: u32, v: f32) {
     }
 }
 
-fn hash(x_in: u32) -> u32 {
-    var x = x_in * 747796405u + 2891336453u;
-    x = ((x >> ((x >> 28u) + 4u)) ^ x) * 277803737u;
-    return (x >> 22u) ^ x;
-}
-
 fn rand01(state: ptr<function, u32>) -> f32 {
-    *state = hash(*state);
+    *state = optics_pcg_hash(*state);
     return f32(*state >> 8u) / 16777216.0;
 }
 
@@ -244,7 +238,7 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var p = states[slab * cap + i];
-    var rng = hash(i ^ hash(slab * 0x9e3779b9u + vp.dims.w));
+    var rng = optics_pcg_hash(i ^ optics_pcg_hash(slab * 0x9e3779b9u + vp.dims.w));
     let h = vol_half();
     let e = vp.lay.x;
     let s = entry_sign();
