@@ -8,14 +8,17 @@
 //!     [--volume field=value,...]
 //! ```
 //!
-//! Errors (missing file, no camera, no lights, no adapter, bad option) print one line and
-//! exit with status 2; no output file is written unless the whole render succeeded.
+//! The scene path is relative to the working directory (its buffers and images to the glTF's
+//! folder). Errors (missing or unreadable file, no camera, no lights, no adapter, bad option, a
+//! size above what this adapter allows: see `bevy_caustics::limits`) print one line naming
+//! the file or option and exit with status 2; no output file is written unless the whole
+//! render succeeded.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use bevy_caustics::CausticsTechnique;
-use bevy_caustics::headless::{RenderJob, find_adapter, run};
+use bevy_caustics::headless::{RenderJob, adapter_limits, check_job, find_adapter, run};
 use bevy_caustics::reference::{CausticImage, compare};
 
 struct Outputs {
@@ -40,8 +43,10 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
     let mut i = 0;
     let num = |v: Option<&String>, name: &str| -> Result<u64, String> {
         let v = v.ok_or_else(|| format!("{name} needs a value"))?;
-        v.parse::<u64>()
-            .map_err(|_| format!("{name} expects a non-negative integer, got '{v}'"))
+        v.parse::<u64>().map_err(|e| match e.kind() {
+            std::num::IntErrorKind::PosOverflow => format!("{name} {v} is too large"),
+            _ => format!("{name} expects a non-negative integer, got '{v}'"),
+        })
     };
     while i < args.len() {
         let a = args[i].as_str();
@@ -57,10 +62,11 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                     format!("unknown technique '{t}' (available: reference, aaps, volume)")
                 })?;
             }
-            "--width" => job.width = num(v, a)? as u32,
-            "--height" => job.height = num(v, a)? as u32,
+            // Saturating: a value past u32 stays out of range for `check_job` to refuse.
+            "--width" => job.width = num(v, a)?.min(u32::MAX as u64) as u32,
+            "--height" => job.height = num(v, a)?.min(u32::MAX as u64) as u32,
             "--photons" => job.photons = Some(num(v, a)?),
-            "--frames" => job.frames = num(v, a)?.clamp(1, 100_000) as u32,
+            "--frames" => job.frames = num(v, a)?.min(u32::MAX as u64) as u32,
             "--seed" => job.seed = num(v, a)?,
             "--ev100" => {
                 let t = v.ok_or("--ev100 needs a value")?;
@@ -177,6 +183,11 @@ fn real_main(args: &[String]) -> Result<(), String> {
         return Err(format!("scene file not found: {}", job.scene.display()));
     }
     find_adapter()?;
+    // Every size against this adapter's maxima before anything is allocated.
+    let limits = adapter_limits()?;
+    check_job(&job, &limits)?;
+    let mut job = job;
+    job.limits = Some(limits);
     let (w, h) = (job.width, job.height);
     let mut report = run(job)?;
     let caustics = report

@@ -21,6 +21,7 @@
 
 pub mod components;
 pub mod headless;
+pub mod limits;
 pub mod optics;
 pub mod reference;
 pub mod render;
@@ -28,6 +29,7 @@ pub mod scene;
 pub mod scenes;
 pub mod volume;
 
+use bevy::pbr::DefaultOpaqueRendererMethod;
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy::render::render_resource::{DownlevelFlags, WgpuLimits as Limits};
@@ -38,6 +40,7 @@ pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
     CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace,
 };
+pub use limits::CausticsLimits;
 pub use render::CausticsDispatchLog;
 
 /// Everything a user needs.
@@ -60,8 +63,34 @@ pub enum CausticsSystems {
 }
 
 /// Adds caustics to cameras with [`Caustics`].
+///
+/// The composite adds caustic light to the deferred G-buffer's receivers, so the plugin makes
+/// [`OpaqueRendererMethod::Deferred`](bevy::pbr::OpaqueRendererMethod) the app's default
+/// opaque method ([`DefaultOpaqueRendererMethod`]) when it is added, with one `info!` if it
+/// replaces Bevy's forward default. To keep forward rendering, insert
+/// `DefaultOpaqueRendererMethod::forward()` *after* adding the plugin: receivers rendered
+/// forward (by that default, by their material's `opaque_render_method`, or by a blended
+/// `alpha_mode`) get no caustic, and each one a caustics camera sees is named in one `warn!`.
 #[derive(Default)]
 pub struct CausticsPlugin;
+
+/// Make deferred the default opaque method unless the app has chosen one (see
+/// [`CausticsPlugin`]).
+fn default_to_deferred(app: &mut App) {
+    let world = app.world_mut();
+    match world.get_resource_mut::<DefaultOpaqueRendererMethod>() {
+        None => world.insert_resource(DefaultOpaqueRendererMethod::deferred()),
+        Some(mut method) if scene::forward::is_forward_default(&method) => {
+            method.set_to_deferred();
+            info!(
+                "bevy_caustics: the default opaque render method is now Deferred (caustics are \
+                 composited onto the deferred G-buffer); insert \
+                 DefaultOpaqueRendererMethod::forward() after CausticsPlugin to keep Forward"
+            );
+        }
+        Some(_) => {}
+    }
+}
 
 /// Whether the GPU supports the plugin; set in `Plugin::finish`.
 #[derive(Resource, Clone, Debug, PartialEq, Eq)]
@@ -109,6 +138,7 @@ impl Plugin for CausticsPlugin {
                     .after(bevy::transform::TransformSystems::Propagate),
             )
             .init_resource::<render::CausticsDispatchLog>();
+        default_to_deferred(app);
         components::validate::plugin(app);
         app.add_plugins(scene::ScenePlugin)
             .add_systems(Update, volume::volumes_from_gltf);
@@ -140,6 +170,13 @@ impl Plugin for CausticsPlugin {
             return;
         }
         app.insert_resource(CausticsSupport::Supported);
+        if let Some(device) = app
+            .get_sub_app(RenderApp)
+            .and_then(|r| r.world().get_resource::<RenderDevice>())
+        {
+            let limits = CausticsLimits::new(&device.limits());
+            app.insert_resource(limits);
+        }
         reference::technique::plugin(app);
         let log = app
             .world()

@@ -616,12 +616,12 @@ fn invalid_component_values_are_clamped() {
         photons: -5,
         ..Default::default()
     };
-    let fixes = sanitize_volume(&mut v);
+    let fixes = sanitize_volume(&mut v, &Default::default());
     let fields: Vec<_> = fixes.iter().map(|f| f.0).collect();
     assert_eq!(fields, ["size", "slabs", "photons"]);
     assert_eq!((v.slabs, v.photons, v.size), (1, 0, Vec3::splat(1e-3)));
     assert!(
-        sanitize_volume(&mut v).is_empty(),
+        sanitize_volume(&mut v, &Default::default()).is_empty(),
         "a clamped value must be valid (one warning only)"
     );
     let mut m = CausticMaterial::glass(0.5);
@@ -839,17 +839,20 @@ fn volumes_at_the_limits_validate() {
         size: Vec3::ZERO,
         ..Default::default()
     };
-    assert_eq!(sanitize_volume(&mut zero).len(), 1);
+    assert_eq!(sanitize_volume(&mut zero, &Default::default()).len(), 1);
     let mut many = CausticsVolume {
         slabs: 64,
         ..Default::default()
     };
-    assert!(sanitize_volume(&mut many).is_empty(), "64 slabs is valid");
+    assert!(
+        sanitize_volume(&mut many, &Default::default()).is_empty(),
+        "64 slabs is valid"
+    );
     let mut too_many = CausticsVolume {
         slabs: 65,
         ..Default::default()
     };
-    assert_eq!(sanitize_volume(&mut too_many).len(), 1);
+    assert_eq!(sanitize_volume(&mut too_many, &Default::default()).len(), 1);
     assert_eq!(too_many.slabs, 64);
 }
 
@@ -874,6 +877,8 @@ mod aaps;
 
 #[path = "cpu/energy.rs"]
 mod energy;
+#[path = "cpu/limits.rs"]
+mod limits;
 #[path = "cpu/reference_cache.rs"]
 mod reference_cache;
 #[path = "cpu/volume.rs"]

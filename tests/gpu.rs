@@ -14,6 +14,8 @@ static GPU: Mutex<()> = Mutex::new(());
 mod aaps;
 #[path = "gpu/energy.rs"]
 mod energy;
+#[path = "gpu/first_use.rs"]
+mod first_use;
 #[path = "gpu/twins.rs"]
 mod twins;
 #[path = "gpu/volume.rs"]

@@ -57,8 +57,11 @@ pub struct AapsSettings {
     /// receivers keeps all but 0.7 % of the power that strikes it; the reference tracer loses
     /// 5.9 % at 16). Range [1, 128]. Cost: only the paths that bounce that often pay for it.
     pub max_bounces: u32,
-    /// Capacity of the splat buffer, splats. Default 2 097 152 (128 MiB). Splats past it are
-    /// counted as overflow and not drawn.
+    /// Capacity of the splat buffer, splats (64 bytes each). Default 2 097 148: 2^21 less the
+    /// 4-splat guard region, so the buffer fits a 128 MiB storage binding (WebGPU's default).
+    /// At most what one storage binding of the GPU holds
+    /// ([`crate::limits::CausticsLimits::max_splat_capacity`]), clamped with a warning.
+    /// Splats past it are counted as overflow and not drawn.
     pub splat_capacity: u32,
     /// Adapt the density every frame. Default true. `false` freezes it at the uniform
     /// density the budget allows (for comparisons).
@@ -80,7 +83,7 @@ impl Default for AapsSettings {
             splat_scale: 1.5,
             max_anisotropy: 16.0,
             max_bounces: 64,
-            splat_capacity: 1 << 21,
+            splat_capacity: (1 << 21) - crate::render::aaps::view::SPLAT_GUARD_SPLATS as u32,
             adaptive: true,
         }
     }
@@ -113,5 +116,14 @@ impl AapsSettings {
             splat_capacity: self.splat_capacity.clamp(1, 1 << 24),
             adaptive: self.adaptive,
         }
+    }
+
+    /// [`Self::sanitized`], then the sizes bounded by the device: the atlas side by
+    /// `max_atlas_resolution`, the splat capacity by `max_splat_capacity`.
+    pub fn sanitized_for(&self, limits: &crate::limits::CausticsLimits) -> Self {
+        let mut s = self.sanitized();
+        s.atlas_resolution = s.atlas_resolution.min(limits.max_atlas_resolution);
+        s.splat_capacity = s.splat_capacity.min(limits.max_splat_capacity);
+        s
     }
 }

@@ -6,8 +6,8 @@ use bevy::prelude::*;
 ///
 /// It requires [`Hdr`] (the composite adds linear irradiance into the HDR target before
 /// tone mapping) and the deferred prepasses (the composite reads the diffuse albedo from the
-/// G-buffer). Make your opaque materials deferred, e.g.
-/// `app.insert_resource(DefaultOpaqueRendererMethod::deferred())`.
+/// G-buffer). [`crate::CausticsPlugin`] makes deferred the default opaque method; receivers
+/// rendered forward get no caustic (one warning each).
 ///
 /// # Usage Notes
 /// Views without this component, and shadow views, run no caustics pass at all. A camera

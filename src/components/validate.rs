@@ -4,7 +4,10 @@
 
 use bevy::prelude::*;
 
-use super::{AapsSettings, CausticLight, CausticMaterial, CausticsVolume};
+use super::{
+    AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsQuality, CausticsVolume,
+};
+use crate::limits::CausticsLimits;
 
 /// Every invalid-input warning the plugin has logged, in order (the same text as the log
 /// line). Lets tools and tests see exactly what was clamped.
@@ -37,8 +40,8 @@ impl CausticsWarnings {
 /// A fixed field: (field name, what was wrong and what it became).
 pub type Fix = (&'static str, String);
 
-/// Clamp a volume's fields into range; returns what was fixed.
-pub fn sanitize_volume(v: &mut CausticsVolume) -> Vec<Fix> {
+/// Clamp a volume's fields into range (the sizes within `limits`); returns what was fixed.
+pub fn sanitize_volume(v: &mut CausticsVolume, limits: &CausticsLimits) -> Vec<Fix> {
     let mut fixes = Vec::new();
     let size = Vec3::new(fix_size(v.size.x), fix_size(v.size.y), fix_size(v.size.z));
     if size != v.size {
@@ -51,43 +54,50 @@ pub fn sanitize_volume(v: &mut CausticsVolume) -> Vec<Fix> {
         ));
         v.size = size;
     }
-    let slabs = v.slabs.clamp(1, 64);
+    let max_slabs = limits.max_volume_slabs;
+    let slabs = v.slabs.clamp(1, max_slabs);
     if slabs != v.slabs {
         fixes.push((
             "slabs",
-            format!("{} is outside [1, 64]; clamped to {slabs}", v.slabs),
+            format!(
+                "{} is outside [1, {max_slabs}]; clamped to {slabs}",
+                v.slabs
+            ),
         ));
         v.slabs = slabs;
     }
-    let photons = v.photons.clamp(0, 1 << 24);
+    let max_photons = limits.volume_photons(v.slabs) as i32;
+    let photons = v.photons.clamp(0, max_photons);
     if photons != v.photons {
         fixes.push((
             "photons",
             format!(
-                "{} is outside [0, 16777216]; clamped to {photons}",
-                v.photons
+                "{} is outside [0, {max_photons}] (this GPU at {} slabs); clamped to {photons}",
+                v.photons, v.slabs
             ),
         ));
         v.photons = photons;
     }
-    let res = v.projector_resolution.clamp(16, 4096);
+    let max_res = limits.volume_projector_side(u32::MAX);
+    let res = v.projector_resolution.clamp(16, max_res);
     if res != v.projector_resolution {
         fixes.push((
             "projector_resolution",
             format!(
-                "{} is outside [16, 4096]; clamped to {res}",
+                "{} is outside [16, {max_res}] (this GPU); clamped to {res}",
                 v.projector_resolution
             ),
         ));
         v.projector_resolution = res;
     }
-    let g = v.gbuffer_resolution.clamp(16, 4096);
+    let max_g = limits.volume_gbuffer_side(u32::MAX, v.slabs);
+    let g = v.gbuffer_resolution.clamp(16, max_g);
     if g != v.gbuffer_resolution {
         fixes.push((
             "gbuffer_resolution",
             format!(
-                "{} is outside [16, 4096]; clamped to {g}",
-                v.gbuffer_resolution
+                "{} is outside [16, {max_g}] (this GPU at {} slabs); clamped to {g}",
+                v.gbuffer_resolution, v.slabs
             ),
         ));
         v.gbuffer_resolution = g;
@@ -198,10 +208,10 @@ pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
     fixes
 }
 
-/// Clamp AAPS settings into range (see [`AapsSettings::sanitized`]); returns what was fixed,
-/// one entry per field that changed.
-pub fn sanitize_aaps(a: &mut AapsSettings) -> Vec<Fix> {
-    let fixed = a.sanitized();
+/// Clamp AAPS settings into range (see [`AapsSettings::sanitized_for`]); returns what was
+/// fixed, one entry per field that changed.
+pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> {
+    let fixed = a.sanitized_for(limits);
     let mut fixes = Vec::new();
     macro_rules! check {
         ($($f:ident),*) => {$(
@@ -231,18 +241,38 @@ pub fn sanitize_aaps(a: &mut AapsSettings) -> Vec<Fix> {
     fixes
 }
 
+/// Clamp a camera's photon count (a `CausticsQuality::Custom` above what its technique
+/// allows on this device, [`CausticsLimits::max_photons`]); returns what was fixed.
+pub fn sanitize_caustics(c: &mut Caustics, limits: &CausticsLimits) -> Vec<Fix> {
+    let mut fixes = Vec::new();
+    let max = limits.max_photons(c.technique);
+    if let CausticsQuality::Custom { photons } = &mut c.quality
+        && *photons > max
+    {
+        fixes.push((
+            "quality",
+            format!(
+                "Custom {{ photons: {photons} }} is above the {} technique's maximum on this GPU, {max}; clamped to {max}",
+                c.technique.name()
+            ),
+        ));
+        *photons = max;
+    }
+    fixes
+}
+
 /// The query a validation system runs over.
 type Checked<'w, 's, C> =
     Query<'w, 's, (Entity, &'static mut C, Option<&'static Name>), Changed<C>>;
 
 fn validate<C: Component<Mutability = bevy::ecs::component::Mutable> + Clone>(
     name: &'static str,
-    sanitize: fn(&mut C) -> Vec<Fix>,
-) -> impl FnMut(Checked<C>, ResMut<CausticsWarnings>) {
-    move |mut q, mut warnings| {
+    sanitize: fn(&mut C, &CausticsLimits) -> Vec<Fix>,
+) -> impl FnMut(Checked<C>, Res<CausticsLimits>, ResMut<CausticsWarnings>) {
+    move |mut q, limits, mut warnings| {
         for (entity, mut c, n) in &mut q {
             let mut fixed = c.clone();
-            let fixes = sanitize(&mut fixed);
+            let fixes = sanitize(&mut fixed, &limits);
             if fixes.is_empty() {
                 continue;
             }
@@ -256,14 +286,17 @@ fn validate<C: Component<Mutability = bevy::ecs::component::Mutable> + Clone>(
 
 /// Registers the validation systems (in `PostUpdate`, before the scene is gathered).
 pub(crate) fn plugin(app: &mut App) {
-    app.init_resource::<CausticsWarnings>().add_systems(
-        PostUpdate,
-        (
-            validate::<CausticsVolume>("CausticsVolume", sanitize_volume),
-            validate::<CausticLight>("CausticLight", sanitize_light),
-            validate::<CausticMaterial>("CausticMaterial", sanitize_material),
-            validate::<AapsSettings>("AapsSettings", sanitize_aaps),
-        )
-            .in_set(crate::CausticsSystems::Validate),
-    );
+    app.init_resource::<CausticsWarnings>()
+        .init_resource::<CausticsLimits>()
+        .add_systems(
+            PostUpdate,
+            (
+                validate::<Caustics>("Caustics", sanitize_caustics),
+                validate::<CausticsVolume>("CausticsVolume", sanitize_volume),
+                validate::<CausticLight>("CausticLight", |l, _| sanitize_light(l)),
+                validate::<CausticMaterial>("CausticMaterial", |m, _| sanitize_material(m)),
+                validate::<AapsSettings>("AapsSettings", sanitize_aaps),
+            )
+                .in_set(crate::CausticsSystems::Validate),
+        );
 }

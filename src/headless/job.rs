@@ -20,6 +20,7 @@ use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
 use serde::Serialize;
 
+use crate::limits::{CausticsLimits, MAX_FRAMES};
 use crate::reference::{
     CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceProgress, ReferenceStatus,
 };
@@ -62,6 +63,14 @@ pub struct RenderJob {
     pub per_frame: Option<fn(&mut World, u32)>,
     /// Give every light of the scene a `CausticLight` (default true).
     pub mark_lights: bool,
+    /// Insert `DefaultOpaqueRendererMethod::forward()` after the plugin (which otherwise makes
+    /// deferred the default): receivers rendered forward get no caustic and a warning (tests).
+    /// Default false.
+    pub forward: bool,
+    /// The device maxima the job's sizes are checked against ([`check_job`]). Default None:
+    /// the WebGPU default device's ([`CausticsLimits::default`]); the command-line renderer
+    /// sets the adapter's.
+    pub limits: Option<CausticsLimits>,
     /// Settings of the `aaps` technique. Default: `AapsSettings::default()`.
     pub aaps: crate::AapsSettings,
     /// Technique `volume`: the settings of the volumes fitted around the casters (one per
@@ -86,6 +95,8 @@ impl Default for RenderJob {
             hook: None,
             per_frame: None,
             mark_lights: true,
+            forward: false,
+            limits: None,
             aaps: Default::default(),
             volume: Default::default(),
         }
@@ -280,7 +291,60 @@ struct MainCamera;
 #[derive(Component)]
 struct TwinCamera;
 
-/// Render `job`. Errors are one line, meant for the user.
+/// Check the sizes of `job` against `limits` (see [`crate::limits`]): the image side and
+/// pixels, the frames, the photons of its technique, and the AAPS and volume settings that
+/// size memory or work. An error is one line naming the option and its maximum.
+pub fn check_job(job: &RenderJob, limits: &CausticsLimits) -> Result<(), String> {
+    let side = limits.max_image_side;
+    if job.width == 0 || job.height == 0 || job.width > side || job.height > side {
+        return Err(format!(
+            "image size {}x{} is outside 1..={side} on each side",
+            job.width, job.height
+        ));
+    }
+    let pixels = job.width as u64 * job.height as u64;
+    if pixels > limits.max_view_pixels {
+        return Err(format!(
+            "image size {}x{} has {pixels} pixels; this GPU allows {}",
+            job.width, job.height, limits.max_view_pixels
+        ));
+    }
+    if job.frames == 0 || job.frames > MAX_FRAMES {
+        return Err(format!(
+            "--frames {} is outside 1..={MAX_FRAMES}",
+            job.frames
+        ));
+    }
+    if let Some(p) = job.photons {
+        let max = limits.max_photons(job.technique);
+        if p > max {
+            return Err(format!(
+                "--photons {p} is above the {} technique's maximum on this GPU, {max}",
+                job.technique.name()
+            ));
+        }
+    }
+    // The components' own checks; a job refuses what a component would clamp.
+    let refused = |option: &str, fixes: Vec<crate::components::validate::Fix>| match fixes.first() {
+        Some((field, detail)) => Err(format!(
+            "{option} {field}: {}",
+            detail.replace("clamped to", "the nearest accepted value is")
+        )),
+        None => Ok(()),
+    };
+    refused(
+        "--aaps",
+        crate::components::validate::sanitize_aaps(&mut job.aaps.clone(), limits),
+    )?;
+    refused(
+        "--volume",
+        crate::components::validate::sanitize_volume(&mut job.volume.clone(), limits),
+    )?;
+    Ok(())
+}
+
+/// Render `job`. Errors are one line, meant for the user; the sizes are checked first
+/// ([`check_job`] against `job.limits`).
 pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     if !job.scene.is_file() {
         return Err(format!("scene file not found: {}", job.scene.display()));
@@ -297,19 +361,12 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
             job.scene.display()
         ));
     }
-    if job.width == 0 || job.height == 0 || job.width > 8192 || job.height > 8192 {
-        return Err(format!(
-            "image size {}x{} is outside 1..=8192",
-            job.width, job.height
-        ));
-    }
-    let dir = job
-        .scene
-        .parent()
-        .map(|p| p.to_path_buf())
-        .unwrap_or_default();
-    let dir =
-        std::fs::canonicalize(&dir).map_err(|e| format!("cannot open {}: {e}", dir.display()))?;
+    check_job(&job, &job.limits.clone().unwrap_or_default())?;
+    // The asset root is the glTF's folder (its buffers and images resolve against it), as an
+    // absolute path: relative to the working directory, whatever Bevy's own asset root is.
+    let scene = std::fs::canonicalize(&job.scene)
+        .map_err(|e| format!("cannot open {}: {e}", job.scene.display()))?;
+    let dir = scene.parent().map(|p| p.to_path_buf()).unwrap_or_default();
     let shared = Shared::default();
     let mut app = App::new();
     let asset = AssetPlugin {
@@ -338,9 +395,12 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
             1.0 / 240.0,
         )));
     }
-    app.add_plugins((RenderDiagnosticsPlugin, CausticsPlugin))
-        .insert_resource(DefaultOpaqueRendererMethod::deferred())
-        .insert_resource(Job(job.clone()))
+    // No `DefaultOpaqueRendererMethod::deferred()` here: the plugin makes it the default.
+    app.add_plugins((RenderDiagnosticsPlugin, CausticsPlugin));
+    if job.forward {
+        app.insert_resource(DefaultOpaqueRendererMethod::forward());
+    }
+    app.insert_resource(Job(job.clone()))
         .insert_resource(shared.clone())
         .init_resource::<Phase>()
         .add_systems(Startup, start)
@@ -859,6 +919,17 @@ pub fn find_adapter() -> Result<String, String> {
             "no GPU adapter found (no Vulkan driver? on Debian/Ubuntu install mesa-vulkan-drivers)"
                 .to_string()
         })
+}
+
+/// The maxima ([`CausticsLimits`]) of the adapter [`find_adapter`] names: Bevy requests its
+/// device at the adapter's own limits, so a job that passes [`check_job`] with these fits.
+pub fn adapter_limits() -> Result<CausticsLimits, String> {
+    let instance = wgpu::Instance::default();
+    let adapters = bevy::tasks::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    adapters
+        .first()
+        .map(|a| CausticsLimits::new(&a.limits()))
+        .ok_or_else(|| "no GPU adapter found".to_string())
 }
 
 /// On a headless Linux machine without `XDG_RUNTIME_DIR`, the Wayland client library that the

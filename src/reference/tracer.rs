@@ -42,6 +42,9 @@ use super::image::CausticImage;
 
 /// Photons per work chunk (fixed, so results do not depend on the thread count).
 const CHUNK: u64 = 4096;
+/// Chunks traced in parallel before their deposits are added to the image (bounds memory:
+/// at most 256 · 4096 photons' deposits at once).
+const BATCH_CHUNKS: u64 = 256;
 
 /// Settings of one reference render.
 #[derive(Clone, Copy, Debug)]
@@ -379,49 +382,54 @@ pub fn trace(
     let chunks_per_light = n.div_ceil(CHUNK);
     let total = n * emitters.len() as u64;
     let done = AtomicU64::new(0);
-    let jobs: Vec<(usize, u64)> = (0..emitters.len())
-        .flat_map(|e| (0..chunks_per_light).map(move |c| (e, c)))
-        .collect();
-    let results: Vec<(Vec<(u32, Vec3)>, TraceStats)> = jobs
-        .par_iter()
-        .map(|&(e, c)| {
-            let (light_index, em) = &emitters[e];
-            let begin = c * CHUNK;
-            let end = (begin + CHUNK).min(n);
-            let mut deposits = Vec::new();
-            let mut stats = TraceStats::default();
-            for k in begin..end {
-                let mut rng = Pcg32::new(settings.seed, ((*light_index as u64) << 40) ^ k);
-                let (o, d, flux) = em.emit(&mut rng);
-                stats.photons_emitted += 1;
-                stats.flux_emitted += flux.as_dvec3();
-                trace_photon(
-                    tlas,
-                    &map,
-                    o,
-                    d,
-                    flux,
-                    &mut rng,
-                    settings,
-                    scene_scale,
-                    &mut deposits,
-                    &mut stats,
-                );
-            }
-            if let Some(p) = progress {
-                let now = done.fetch_add(end - begin, Ordering::Relaxed) + (end - begin);
-                p(now, total);
-            }
-            (deposits, stats)
-        })
-        .collect();
     let mut acc = vec![DVec3::ZERO; (cam.width * cam.height) as usize];
     let mut stats = TraceStats::default();
-    for (deposits, s) in results {
-        for (i, e) in deposits {
-            acc[i as usize] += e.as_dvec3();
+    // Chunks in batches of BATCH_CHUNKS, each traced in parallel and added in chunk order, so
+    // the image is the same on any thread count and the deposits held at once are bounded
+    // (BATCH_CHUNKS · CHUNK photons), whatever the photon count.
+    let jobs = emitters.len() as u64 * chunks_per_light;
+    for batch in (0..jobs).step_by(BATCH_CHUNKS as usize) {
+        let results: Vec<(Vec<(u32, Vec3)>, TraceStats)> = (batch
+            ..(batch + BATCH_CHUNKS).min(jobs))
+            .into_par_iter()
+            .map(|j| {
+                let (e, c) = ((j / chunks_per_light) as usize, j % chunks_per_light);
+                let (light_index, em) = &emitters[e];
+                let begin = c * CHUNK;
+                let end = (begin + CHUNK).min(n);
+                let mut deposits = Vec::new();
+                let mut stats = TraceStats::default();
+                for k in begin..end {
+                    let mut rng = Pcg32::new(settings.seed, ((*light_index as u64) << 40) ^ k);
+                    let (o, d, flux) = em.emit(&mut rng);
+                    stats.photons_emitted += 1;
+                    stats.flux_emitted += flux.as_dvec3();
+                    trace_photon(
+                        tlas,
+                        &map,
+                        o,
+                        d,
+                        flux,
+                        &mut rng,
+                        settings,
+                        scene_scale,
+                        &mut deposits,
+                        &mut stats,
+                    );
+                }
+                if let Some(p) = progress {
+                    let now = done.fetch_add(end - begin, Ordering::Relaxed) + (end - begin);
+                    p(now, total);
+                }
+                (deposits, stats)
+            })
+            .collect();
+        for (deposits, s) in results {
+            for (i, e) in deposits {
+                acc[i as usize] += e.as_dvec3();
+            }
+            stats.merge(s);
         }
-        stats.merge(s);
     }
     TraceOutput {
         image: CausticImage {

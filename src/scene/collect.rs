@@ -338,9 +338,13 @@ impl Plugin for ScenePlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<CausticsScene>().add_systems(
             PostUpdate,
-            gather_scene
-                .in_set(crate::CausticsSystems::Gather)
-                .after(bevy::transform::TransformSystems::Propagate),
+            (
+                gather_scene
+                    .in_set(crate::CausticsSystems::Gather)
+                    .after(bevy::transform::TransformSystems::Propagate),
+                super::forward::warn_forward_receivers
+                    .after(bevy::camera::visibility::VisibilitySystems::CheckVisibility),
+            ),
         );
     }
 }

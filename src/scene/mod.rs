@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod collect;
+pub mod forward;
 pub mod gpu;
 pub mod model;
 

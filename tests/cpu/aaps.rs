@@ -147,7 +147,7 @@ fn aaps_settings_are_sanitized() {
     use bevy_caustics::AapsSettings;
     use bevy_caustics::components::validate::sanitize_aaps;
     let mut ok = AapsSettings::default();
-    assert!(sanitize_aaps(&mut ok).is_empty());
+    assert!(sanitize_aaps(&mut ok, &Default::default()).is_empty());
     let mut bad = AapsSettings {
         atlas_resolution: 100,
         target_area: f32::NAN,
@@ -159,7 +159,7 @@ fn aaps_settings_are_sanitized() {
         splat_capacity: 0,
         ..Default::default()
     };
-    let fixes = sanitize_aaps(&mut bad);
+    let fixes = sanitize_aaps(&mut bad, &Default::default());
     let fields: Vec<&str> = fixes.iter().map(|f| f.0).collect();
     assert_eq!(
         fields,
@@ -179,7 +179,7 @@ fn aaps_settings_are_sanitized() {
     assert_eq!(bad.temporal_weight, 1.0);
     assert_eq!(bad.min_density, 1.0);
     assert!(
-        sanitize_aaps(&mut bad).is_empty(),
+        sanitize_aaps(&mut bad, &Default::default()).is_empty(),
         "a clamped value is valid"
     );
 }

@@ -467,7 +467,10 @@ fn volume_settings_are_clamped() {
         lod_distance: -1.0,
         ..Default::default()
     };
-    let fields: Vec<_> = sanitize_volume(&mut v).iter().map(|f| f.0).collect();
+    let fields: Vec<_> = sanitize_volume(&mut v, &Default::default())
+        .iter()
+        .map(|f| f.0)
+        .collect();
     assert_eq!(
         fields,
         [
@@ -478,5 +481,5 @@ fn volume_settings_are_clamped() {
             "lod_distance"
         ]
     );
-    assert!(sanitize_volume(&mut v).is_empty());
+    assert!(sanitize_volume(&mut v, &Default::default()).is_empty());
 }

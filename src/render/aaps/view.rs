@@ -361,13 +361,14 @@ pub fn prepare_aaps_views(
             continue;
         }
         let scene = scene.as_ref().unwrap();
-        let settings = caustics.aaps.sanitized();
+        let limits = crate::limits::CausticsLimits::new(&device.limits());
+        let settings = caustics.aaps.sanitized_for(&limits);
         let (atlas, tile, per_row) = atlas_layout(settings.atlas_resolution, scene.lights);
         let key = StateKey {
             atlas: [atlas, tile, per_row, scene.lights],
             splat_capacity: splat_capacity(settings.splat_capacity, &device.limits()),
             size,
-            budget_per_light: caustics.photons_per_light,
+            budget_per_light: caustics.photons_per_light.min(limits.max_aaps_photons),
             adaptive: settings.adaptive,
             min_max: [
                 settings.min_density.to_bits(),

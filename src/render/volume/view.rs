@@ -139,8 +139,8 @@ pub fn prepare_volumes(
     if store.scene.as_ref().map(|s| s.generation) != Some(scene.generation) {
         store.scene = Some(VolumeScene::build(&device, scene));
     }
-    let max_bytes = device.limits().max_storage_buffer_binding_size;
-    let max_bytes = max_bytes.min(device.limits().max_buffer_size);
+    let limits = crate::limits::CausticsLimits::new(&device.limits());
+    let max_bytes = limits.max_binding_bytes;
     let mut next: Vec<VolumeGpu> = Vec::new();
     let mut old: Vec<VolumeGpu> = std::mem::take(&mut store.volumes);
     let vs = store.scene.as_ref().unwrap();
@@ -160,8 +160,8 @@ pub fn prepare_volumes(
         let key = VolumeKey {
             capacity,
             slabs,
-            gbuffer: volume.gbuffer_resolution.clamp(16, 4096),
-            projector: volume.projector_resolution.clamp(16, 4096),
+            gbuffer: limits.volume_gbuffer_side(volume.gbuffer_resolution, slabs),
+            projector: limits.volume_projector_side(volume.projector_resolution),
             tile: volume.tile_size.clamp(1, 64),
         };
         let mut gpu = match old.iter().position(|g| g.entity == *entity && g.key == key) {

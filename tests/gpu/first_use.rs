@@ -1,0 +1,308 @@
+//! What a new user meets first (issue 12): the caustic without opting in to deferred
+//! rendering, a warning naming each forward-rendered receiver, and the command line's answer to
+//! bad files, relative paths and absurd numbers.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use bevy_caustics::headless::{RenderJob, RenderReport, run};
+
+use super::{GPU, render_example, require_gpu, scene};
+
+/// Light the composite added: Σ over pixels of (frame with caustics − twin without), green,
+/// against what it should add, Σ albedo / π · E · exposure (floor albedo 0.8).
+fn added_and_expected(r: &RenderReport) -> (f64, f64) {
+    let e = r.caustics.as_ref().expect("caustics buffer");
+    let added: f64 = r
+        .linear_with
+        .iter()
+        .zip(&r.linear_without)
+        .map(|(w, wo)| (w[1] - wo[1]) as f64)
+        .sum();
+    let expected: f64 = e
+        .data
+        .iter()
+        .map(|v| (0.8 / std::f32::consts::PI * v.y * r.exposure) as f64)
+        .sum();
+    (added, expected)
+}
+
+fn glass_sphere_job(forward: bool) -> RenderJob {
+    RenderJob {
+        scene: scene("glass_sphere"),
+        width: 64,
+        height: 64,
+        photons: Some(1 << 16),
+        frames: 4,
+        linear: true,
+        forward,
+        ..Default::default()
+    }
+}
+
+/// A minimal app (DefaultPlugins + CausticsPlugin, no `DefaultOpaqueRendererMethod` of its
+/// own): the plugin makes deferred the default and the caustic is in the frame. The twin
+/// camera without `Caustics` sees the same scene, so the difference is the composite's.
+#[test]
+fn caustic_without_opting_in_to_deferred() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let r = run(glass_sphere_job(false)).expect("render");
+    let (added, expected) = added_and_expected(&r);
+    println!("deferred by default: added {added:.4}, expected {expected:.4}");
+    assert!(expected > 1.0, "no caustic to composite: {expected}");
+    // Pixels that see the floor through the glass (the forward transmissive pass) show the
+    // caustic too, those that see the glass hide some: within 10 % (measured -1.8 %).
+    assert!(
+        (added / expected - 1.0).abs() < 0.10,
+        "added {added}, expected {expected}"
+    );
+    assert!(
+        !r.warnings.iter().any(|w| w.contains("rendered forward")),
+        "{:?}",
+        r.warnings
+    );
+}
+
+/// The app keeps forward rendering (inserted after the plugin): no caustic can be
+/// composited, and the floor is named in one warning.
+#[test]
+fn forward_receiver_is_named_in_a_warning() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let r = run(glass_sphere_job(true)).expect("render");
+    let (added, expected) = added_and_expected(&r);
+    println!(
+        "forward: added {added:.4}, expected {expected:.4}; {:?}",
+        r.warnings
+    );
+    assert!(expected > 1.0);
+    assert!(added.abs() < 0.01 * expected, "added {added}");
+    let forward: Vec<_> = r
+        .warnings
+        .iter()
+        .filter(|w| w.contains("rendered forward"))
+        .collect();
+    assert_eq!(forward.len(), 1, "{:?}", r.warnings);
+    assert!(forward[0].contains("floor)"), "{}", forward[0]);
+}
+
+/// One run of the command-line renderer with a deadline: (exit code, stderr, seconds). A
+/// process killed by a signal (an abort) has no exit code and fails the case.
+fn cli_timed(args: &[&str], cwd: &Path, deadline: Duration) -> (Option<i32>, String, f64) {
+    let start = Instant::now();
+    let mut child = Command::new(render_example())
+        .args(args)
+        .current_dir(cwd)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run the render example (cargo test builds it)");
+    loop {
+        if child.try_wait().expect("wait").is_some() {
+            break;
+        }
+        if start.elapsed() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{args:?} ran past {deadline:?}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().expect("output");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code(), err, start.elapsed().as_secs_f64())
+}
+
+/// The edge cases of the command line: each is refused with one `error:` line naming what was
+/// wrong and exit status 2, or renders (exit 0), never a signal, never past its deadline
+/// (refusals 20 s, renders 90 s; the times are printed).
+#[test]
+fn cli_edge_cases() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_edge_{}", std::process::id()));
+    let sub = dir.join("sub");
+    std::fs::create_dir_all(&sub).unwrap();
+    let ring = scene("ring");
+    let text = std::fs::read_to_string(&ring).unwrap();
+    std::fs::copy(&ring, dir.join("ring.gltf")).unwrap();
+    std::fs::copy(ring.with_extension("bin"), dir.join("ring.bin")).unwrap();
+    std::fs::write(
+        dir.join("garbage.gltf"),
+        [0x9fu8, 0x00, 0xff, 0x13, 0x37].repeat(50),
+    )
+    .unwrap();
+    std::fs::write(dir.join("truncated.gltf"), &text[..text.len() / 2]).unwrap();
+    // The same document in a folder without its buffer file.
+    std::fs::write(sub.join("nobuffer.gltf"), &text).unwrap();
+
+    enum Want {
+        Refused(&'static str),
+        Renders,
+    }
+    use Want::*;
+    let small = ["--width", "32", "--height", "32", "--frames", "1"];
+    let mut cases: Vec<(String, Vec<String>, &Path, Want)> = vec![
+        (
+            "garbage file".into(),
+            vec!["garbage.gltf".into()],
+            &dir,
+            Refused("garbage.gltf"),
+        ),
+        (
+            "truncated glTF".into(),
+            vec!["truncated.gltf".into()],
+            &dir,
+            Refused("truncated.gltf"),
+        ),
+        (
+            "missing buffer".into(),
+            vec!["nobuffer.gltf".into()],
+            &sub,
+            Refused("nobuffer.gltf"),
+        ),
+        (
+            "missing file".into(),
+            vec!["absent.gltf".into()],
+            &dir,
+            Refused("absent.gltf"),
+        ),
+        (
+            "file name in its folder".into(),
+            vec!["ring.gltf".into()],
+            &dir,
+            Renders,
+        ),
+        (
+            "relative path from another folder".into(),
+            vec!["../ring.gltf".into()],
+            &sub,
+            Renders,
+        ),
+        (
+            "--frames 0".into(),
+            vec!["ring.gltf".into(), "--frames".into(), "0".into()],
+            &dir,
+            Refused("--frames 0"),
+        ),
+        (
+            "--frames 1e9".into(),
+            vec!["ring.gltf".into(), "--frames".into(), "1000000000".into()],
+            &dir,
+            Refused("--frames 1000000000"),
+        ),
+    ];
+    for t in ["reference", "aaps", "volume"] {
+        let with = |extra: &[&str]| {
+            let mut a = vec!["ring.gltf".to_string(), "--technique".into(), t.into()];
+            a.extend(extra.iter().map(|s| s.to_string()));
+            a
+        };
+        cases.push((
+            format!("{t} --photons 0"),
+            with(&["--photons", "0"]),
+            &dir,
+            Renders,
+        ));
+        cases.push((
+            format!("{t} --photons 1"),
+            with(&["--photons", "1"]),
+            &dir,
+            Renders,
+        ));
+        cases.push((
+            format!("{t} --photons 1e14"),
+            with(&["--photons", "99999999999999"]),
+            &dir,
+            Refused("--photons 99999999999999"),
+        ));
+        cases.push((
+            format!("{t} --width 0"),
+            with(&["--width", "0"]),
+            &dir,
+            Refused("image size 0x"),
+        ));
+        cases.push((
+            format!("{t} --height 1e5"),
+            with(&["--height", "100000"]),
+            &dir,
+            Refused("outside 1..="),
+        ));
+    }
+    for (name, field, want) in [
+        (
+            "--aaps splat_capacity=1e9",
+            "splat_capacity=1e9",
+            "--aaps splat_capacity",
+        ),
+        (
+            "--aaps atlas_resolution=1e5",
+            "atlas_resolution=1e5",
+            "--aaps atlas_resolution",
+        ),
+    ] {
+        let a = vec![
+            "ring.gltf".into(),
+            "--technique".into(),
+            "aaps".into(),
+            "--aaps".into(),
+            field.into(),
+        ];
+        cases.push((name.into(), a, &dir, Refused(want)));
+    }
+    for (name, field, want) in [
+        (
+            "--volume gbuffer_resolution=1e5",
+            "gbuffer_resolution=1e5",
+            "--volume gbuffer_resolution",
+        ),
+        ("--volume slabs=0", "slabs=0", "--volume slabs"),
+        ("--volume photons=1e14", "photons=1e14", "--volume photons"),
+    ] {
+        let a = vec![
+            "ring.gltf".into(),
+            "--technique".into(),
+            "volume".into(),
+            "--volume".into(),
+            field.into(),
+        ];
+        cases.push((name.into(), a, &dir, Refused(want)));
+    }
+    let mut failures = Vec::new();
+    for (name, args, cwd, want) in &cases {
+        let mut a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        // Small renders; a later --width/--height/--frames of the case wins over these.
+        let mut full: Vec<&str> = vec![a.remove(0)];
+        full.extend(small);
+        full.extend(a);
+        let out = PathBuf::from(cwd).join("never.exr");
+        let _ = std::fs::remove_file(&out);
+        let out_s = out.to_string_lossy().into_owned();
+        full.extend(["--out-exr", &out_s]);
+        let deadline = Duration::from_secs(match want {
+            Refused(_) => 20,
+            Renders => 90,
+        });
+        let (code, err, secs) = cli_timed(&full, cwd, deadline);
+        let errors: Vec<_> = err.lines().filter(|l| l.starts_with("error:")).collect();
+        println!("{name}: exit {code:?} in {secs:.1} s: {errors:?}");
+        let ok = match want {
+            Refused(needle) => {
+                code == Some(2) && errors.len() == 1 && errors[0].contains(needle) && !out.exists()
+            }
+            Renders => code == Some(0) && errors.is_empty() && out.exists(),
+        };
+        if !ok {
+            failures.push(format!("{name}: exit {code:?}\n{err}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n---\n"));
+}
