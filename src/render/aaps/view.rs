@@ -23,7 +23,7 @@ pub const ACCUM_HEADER_WORDS: u64 = 32;
 pub const SPLAT_GUARD_SPLATS: u64 = 4;
 /// The splat capacity the device can bind: the requested one, less what would push the buffer
 /// with its guard region past the storage-binding and buffer size limits (lavapipe: 128 MiB,
-/// so the default 2 097 152 splats become 2 097 148).
+/// 2 097 148 splats, the default of `AapsSettings::splat_capacity`).
 pub fn splat_capacity(requested: u32, limits: &bevy::render::render_resource::WgpuLimits) -> u32 {
     let max_bytes = limits
         .max_storage_buffer_binding_size
