@@ -170,11 +170,13 @@ impl Plugin for CausticsPlugin {
             return;
         }
         app.insert_resource(CausticsSupport::Supported);
-        if let Some(device) = app
-            .get_sub_app(RenderApp)
-            .and_then(|r| r.world().get_resource::<RenderDevice>())
+        // The device's maxima, once: the main world validates against them, the render world
+        // sizes its buffers by them.
+        if let Some(render_app) = app.get_sub_app_mut(RenderApp)
+            && let Some(device) = render_app.world().get_resource::<RenderDevice>()
         {
             let limits = CausticsLimits::new(&device.limits());
+            render_app.insert_resource(limits.clone());
             app.insert_resource(limits);
         }
         reference::technique::plugin(app);

@@ -3,7 +3,6 @@
 //! Bevy apps run one at a time (a global lock), each on a small target.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::Mutex;
 
 use bevy_caustics::headless::{RenderJob, find_adapter, run};
@@ -205,14 +204,9 @@ fn render_example() -> PathBuf {
 }
 
 fn cli(args: &[&str]) -> (i32, String) {
-    let out = Command::new(render_example())
-        .args(args)
-        .output()
-        .expect("run the render example (cargo test builds it)");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let deadline = std::time::Duration::from_secs(120);
+    let (code, err, _) = first_use::cli_timed(args, Path::new("."), deadline);
+    (code.unwrap_or(-1), err)
 }
 
 /// The CLI renders, writes its three files, and compares against an EXR; bad input gives one

@@ -4,9 +4,13 @@
 //! Nothing is written to disk here; the callers write their outputs only once everything
 //! succeeded.
 
+mod adapter;
+mod check;
 mod job;
 mod volume;
 
 pub use crate::volume::volume_from_extras;
+pub use adapter::{adapter_limits, decode_f16_rgba, find_adapter, quiet_headless_environment};
+pub use check::check_job;
 pub use job::*;
 pub use volume::VolumeCounters;

@@ -94,7 +94,11 @@ fn forward_receiver_is_named_in_a_warning() {
 
 /// One run of the command-line renderer with a deadline: (exit code, stderr, seconds). A
 /// process killed by a signal (an abort) has no exit code and fails the case.
-fn cli_timed(args: &[&str], cwd: &Path, deadline: Duration) -> (Option<i32>, String, f64) {
+pub(crate) fn cli_timed(
+    args: &[&str],
+    cwd: &Path,
+    deadline: Duration,
+) -> (Option<i32>, String, f64) {
     let start = Instant::now();
     let mut child = Command::new(render_example())
         .args(args)

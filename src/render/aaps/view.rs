@@ -336,6 +336,7 @@ pub fn prepare_aaps_views(
     queue: Res<RenderQueue>,
     scene: Option<Res<AapsSceneBuffers>>,
     support: Res<super::AapsSupport>,
+    limits: Res<crate::limits::CausticsLimits>,
     mut views: Query<(
         Entity,
         &ExtractedCaustics,
@@ -361,7 +362,6 @@ pub fn prepare_aaps_views(
             continue;
         }
         let scene = scene.as_ref().unwrap();
-        let limits = crate::limits::CausticsLimits::new(&device.limits());
         let settings = caustics.aaps.sanitized_for(&limits);
         let (atlas, tile, per_row) = atlas_layout(settings.atlas_resolution, scene.lights);
         let key = StateKey {

@@ -98,6 +98,7 @@ pub fn prepare_volumes(
     extracted: Option<Res<ExtractedVolumes>>,
     scene: Option<Res<ExtractedCausticsScene>>,
     mut store: ResMut<VolumeStore>,
+    limits: Res<crate::limits::CausticsLimits>,
     mut views: Query<(
         Entity,
         &ExtractedCaustics,
@@ -139,7 +140,6 @@ pub fn prepare_volumes(
     if store.scene.as_ref().map(|s| s.generation) != Some(scene.generation) {
         store.scene = Some(VolumeScene::build(&device, scene));
     }
-    let limits = crate::limits::CausticsLimits::new(&device.limits());
     let max_bytes = limits.max_binding_bytes;
     let mut next: Vec<VolumeGpu> = Vec::new();
     let mut old: Vec<VolumeGpu> = std::mem::take(&mut store.volumes);
