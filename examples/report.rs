@@ -19,7 +19,9 @@ use bevy_caustics::headless::{RenderJob, find_adapter, run};
 use bevy_caustics::reference::{CausticImage, ImageMetrics, compare};
 use plotters::prelude::*;
 
-use bevy_caustics::reference::cache::{CONVERGED_PHOTONS, CONVERGED_SEED, converged_recipe};
+use bevy_caustics::reference::cache::{
+    CONVERGED_PHOTONS, CONVERGED_SEED, POOL_PHOTONS, converged_photons, converged_recipe,
+};
 const SWEEP_SEED: u64 = 2;
 
 struct Point {
@@ -171,7 +173,7 @@ fn real_main() -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "Reference images: the reference technique at {CONVERGED_PHOTONS} photons per light, seed {CONVERGED_SEED} (cached in `assets/reference/`). Sweep seed {SWEEP_SEED}. Metrics over all pixels (pixels without caustics are zero in both): RMSE of luminance in lux, relative RMSE (RMSE / mean reference luminance), mean FLIP (LDR, both images scaled by the reference's 99th percentile), relative energy error.\n"
+        "Reference images: the reference technique at {CONVERGED_PHOTONS} photons per light ({POOL_PHOTONS} on pool), seed {CONVERGED_SEED} (cached in `assets/reference/`). Sweep seed {SWEEP_SEED}. Metrics over all pixels (pixels without caustics are zero in both): RMSE of luminance in lux, relative RMSE (RMSE / mean reference luminance), mean FLIP (LDR, both images scaled by the reference's 99th percentile), relative energy error.\n"
     );
     let _ = writeln!(
         md,
@@ -255,7 +257,7 @@ fn converged(
         scene: scene_path.to_path_buf(),
         width: size,
         height: size,
-        photons: Some(CONVERGED_PHOTONS),
+        photons: Some(converged_photons(scene)),
         seed: CONVERGED_SEED,
         frames: 4,
         ..Default::default()
