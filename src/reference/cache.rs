@@ -8,8 +8,11 @@ use super::TraceSettings;
 pub const CONVERGED_PHOTONS: u64 = 1 << 23;
 /// Photons per light of the `pool` reference: at [`CONVERGED_PHOTONS`] two references of
 /// different seeds differ by RMSE 2516 lx (about 1780 lx of noise each), more than AAPS's
-/// error, so AAPS's budget test could not see it fall. 2^28 takes 265 s on 2 cores.
+/// error on pool, so no AAPS budget could show that error falling. 2^28 takes 265 s on 2 cores.
 pub const POOL_PHOTONS: u64 = 1 << 28;
+
+/// Seed of a converged reference (other renders use other seeds, so their noise is independent).
+pub const CONVERGED_SEED: u64 = 1;
 
 /// Photons per light of the converged reference of `scene`.
 pub fn converged_photons(scene: &str) -> u64 {
@@ -19,8 +22,6 @@ pub fn converged_photons(scene: &str) -> u64 {
         CONVERGED_PHOTONS
     }
 }
-/// Seed of a converged reference (other renders use other seeds, so their noise is independent).
-pub const CONVERGED_SEED: u64 = 1;
 
 /// The recipe of the converged reference of `scene` at `size²`: photons, seed and every
 /// tracer setting that changes the result (the path cap and the roulette depth of
