@@ -20,7 +20,8 @@ use bevy_caustics::reference::{CausticImage, ImageMetrics, compare};
 use plotters::prelude::*;
 
 use bevy_caustics::reference::cache::{
-    CONVERGED_PHOTONS, CONVERGED_SEED, POOL_PHOTONS, converged_photons, converged_recipe,
+    AAPS_LEVELS, CONVERGED_PHOTONS, CONVERGED_SEED, POOL_PHOTONS, converged_photons,
+    converged_recipe,
 };
 const SWEEP_SEED: u64 = 2;
 
@@ -35,13 +36,6 @@ struct Point {
     passes: String,
     metrics: ImageMetrics,
 }
-
-/// The AAPS quality levels of the report: (name, photon budget per light, target area px).
-const AAPS_LEVELS: [(&str, u64, f32); 3] = [
-    ("low: 2^16/light, A_t 19", 1 << 16, 19.0),
-    ("medium: 2^18/light, A_t 4", 1 << 18, 4.0),
-    ("high: 2^20/light, A_t 1", 1 << 20, 1.0),
-];
 
 fn main() {
     bevy_caustics::headless::quiet_headless_environment();

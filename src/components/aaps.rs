@@ -63,6 +63,18 @@ pub struct AapsSettings {
     /// ([`crate::limits::CausticsLimits::max_splat_capacity`]), clamped with a warning.
     /// Splats past it are counted as overflow and not drawn.
     pub splat_capacity: u32,
+    /// Share of the frame's photon budget spread evenly over the texels whose photons reached
+    /// a visible receiver last frame (ours, [`crate::optics::budget_split`]); the rest follows
+    /// the thesis's `D' = D A / A_t`. A focus has sub-pixel splats, so `D'` alone leaves it at
+    /// the minimum density at every budget and its error stops falling; the floor grows with
+    /// the budget. Default 0.5. Range [0, 1]; 0 is the thesis's rule.
+    pub budget_floor_share: f32,
+    /// Point splats (ours): a splat whose projected area is under this many pixels is drawn
+    /// into the one pixel holding its centre with its whole flux (`E · area_px`), as the
+    /// reference bins photons. Drawn as a tiny ellipse it would cover 0 or 1 of 4 MSAA
+    /// samples by chance, and that quantisation, not the photon count, set the error at a
+    /// focus. Default 1 px. 0 switches it off. Cost: none (one-pixel quads).
+    pub point_splat_area: f32,
     /// Adapt the density every frame. Default true. `false` freezes it at the uniform
     /// density the budget allows (for comparisons).
     pub adaptive: bool,
@@ -84,6 +96,8 @@ impl Default for AapsSettings {
             max_anisotropy: 16.0,
             max_bounces: 64,
             splat_capacity: (1 << 21) - crate::render::aaps::view::SPLAT_GUARD_SPLATS as u32,
+            budget_floor_share: 0.5,
+            point_splat_area: 1.0,
             adaptive: true,
         }
     }
@@ -114,6 +128,8 @@ impl AapsSettings {
             max_anisotropy: finite(self.max_anisotropy, 16.0).max(1.0),
             max_bounces: self.max_bounces.clamp(1, 128),
             splat_capacity: self.splat_capacity.clamp(1, 1 << 24),
+            budget_floor_share: finite(self.budget_floor_share, 0.5).clamp(0.0, 1.0),
+            point_splat_area: finite(self.point_splat_area, 1.0).clamp(0.0, 16.0),
             adaptive: self.adaptive,
         }
     }

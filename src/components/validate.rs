@@ -235,7 +235,9 @@ pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> 
         splat_scale,
         max_anisotropy,
         max_bounces,
-        splat_capacity
+        splat_capacity,
+        budget_floor_share,
+        point_splat_area
     );
     *a = fixed;
     fixes

@@ -7,6 +7,8 @@ use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
 use glam::{UVec2, Vec2, Vec3};
 
+use super::pcg_hash;
+
 /// Clarberg's octahedral equal-area map from the unit square to the unit sphere (seed 004
 /// section 3.1.2: "a function that takes two parameters and returns a normalized direction,
 /// equally distributing the inputs"; never latitude-longitude, which crowds the poles).
@@ -56,11 +58,22 @@ pub fn floor_square(d: f32) -> u32 {
     k * k
 }
 
+/// The photons a texel of density `d` sends: `floor(d)`, at most 2^24. Non-finite or negative
+/// densities send nothing. (Ours: the thesis rounds down to a square because its samples sit on a
+/// `k x k` grid; [`leaf_sample_uv`] places any count, so the budget's densities are not rounded
+/// down by up to `2 sqrt(d)` photons.)
+pub fn photon_count(d: f32) -> u32 {
+    if !d.is_finite() || d <= 0.0 {
+        return 0;
+    }
+    d.min(16_777_216.0).floor() as u32
+}
+
 /// A sum quadtree over a square, power-of-two density texture (seed 004 sections 2.3.1 and
 /// 3.1.5: every node holds the sum of the photon counts of the leaves below it).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SumQuadtree {
-    /// `levels[0]` are the leaves (photons per texel, a square), `levels.last()` the root.
+    /// `levels[0]` are the leaves (photons per texel, [`photon_count`]), `levels.last()` the root.
     pub levels: Vec<Vec<u32>>,
     /// Side of the leaf level.
     pub size: u32,
@@ -76,7 +89,7 @@ impl SumQuadtree {
         let mut levels = vec![
             density
                 .iter()
-                .map(|d| floor_square(*d))
+                .map(|d| photon_count(*d))
                 .collect::<Vec<u32>>(),
         ];
         let mut s = size;
@@ -139,14 +152,37 @@ impl SumQuadtree {
     }
 }
 
-/// Where sample `sample` of a leaf with `count` samples (a square `k x k`) lies in the unit
-/// square of the whole texture: on a `k x k` grid of cell centres inside `texel`. WGSL twin
-/// `quadtree_leaf_sample_uv` (`src/render/quadtree.wgsl`), used by the trace pass.
+/// The R2 sequence's steps (Roberts 2018: `1/g`, `1/g^2` with `g^3 = g + 1`) in 0.32 fixed
+/// point, so that `n a mod 1` is exact for every sample index.
+pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
+
+/// Where sample `sample` of a leaf with `count` samples lies in the unit square of the whole
+/// texture (`size x size` texels): point `sample` of the R2 Kronecker set
+/// `frac(s + (i + 1/2) (1/g, 1/g^2))`, shifted by `s`, a per-texel Cranley-Patterson rotation
+/// (two [`pcg_hash`]es of the texel index).
+///
+/// Ours, not the thesis's `k x k` grid of cell centres: that grid is the same lattice in every
+/// texel, and it beats against the pixel grid as concentric moiré rings around a focus. The R2
+/// set is low-discrepancy for any count (so densities need not be squares, [`photon_count`]),
+/// and the per-texel rotation makes neighbouring texels' patterns independent; each point is
+/// uniform over its texel (so a photon's energy `power / count` is unbiased). Fixed per texel
+/// and count, so a settled task buffer gives the same image every frame. Exact in 0.32 fixed
+/// point (wrapping integer arithmetic), so the WGSL twin `quadtree_leaf_sample_uv` gives the
+/// same bits.
 pub fn leaf_sample_uv(texel: UVec2, sample: u32, count: u32, size: u32) -> Vec2 {
-    let k = (count.max(1) as f32).sqrt().round().max(1.0) as u32;
-    let (i, j) = (sample % k, (sample / k).min(k - 1));
-    let cell = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
-    (texel.as_vec2() + cell) / size.max(1) as f32
+    let _ = count;
+    let id = texel.y.wrapping_mul(size).wrapping_add(texel.x);
+    let h = pcg_hash(id.wrapping_mul(2_654_435_761) ^ 0x5bd1_e995);
+    let shift = [h, pcg_hash(h ^ 0x68e3_1da4)];
+    let step = |k: usize| {
+        // (i + 1/2) a = i a + a / 2, all mod 2^32.
+        let x = shift[k]
+            .wrapping_add(sample.wrapping_mul(R2_STEP[k]))
+            .wrapping_add(R2_STEP[k] >> 1);
+        // Top 24 bits: exact in f32, in [0, 1).
+        (x >> 8) as f32 * (1.0 / 16_777_216.0)
+    };
+    (texel.as_vec2() + Vec2::new(step(0), step(1))) / size.max(1) as f32
 }
 
 /// The suggested density of seed 004 section 3.1.5 (after Yang and Ouyang):
@@ -315,17 +351,83 @@ pub fn splat_from_differentials(
     )
 }
 
-/// The frame's photon budget as a ceiling (our decision; seed 004 leaves the total to the
-/// target area alone): when the blended densities sum to more than `budget`, every texel is
-/// scaled by `budget / sum`, then rounded down to a square and kept at least at the minimum's
-/// square. Under the budget nothing changes.
-pub fn scale_to_budget(d: f32, sum: f32, budget: f32, min_density: f32) -> f32 {
-    let s = if sum > budget && sum > 0.0 && budget >= 0.0 && sum.is_finite() {
-        budget / sum
+/// How the frame's photon budget is spent (ours; seed 004 leaves the total to the target area
+/// alone): a floor of `share` of the budget spread evenly over the *contributing* texels (those
+/// whose photons reached a visible receiver last frame), the rest following the thesis's
+/// density `D'`, scaled down when it would spend more.
+///
+/// Why a floor: `D' = D A / A_t` sends photons where splats are large and takes them from a
+/// focus, where splats are sub-pixel. There the pixel error comes from how many photons land in
+/// each pixel, so a focus left at the minimum density keeps its error at every budget (RMSE on
+/// `glass_sphere` 165 / 163 / 163 lx at 2^16 / 2^18 / 2^20 photons). The floor grows with the
+/// budget, and only texels that deliver light get it: texels that miss every caster, or whose
+/// light leaves the view, stay at the minimum.
+///
+/// `budget` is the frame's photon budget, `sum` the sum of the blended densities `D'` over all
+/// texels, `contributing` and `idle` the counts of contributing and other texels. The idle
+/// texels' minimum comes out of the budget first. Returns `(floor, scale)` for
+/// [`budget_density`]: `floor = share B' / contributing`, `scale = min(1, (1 - share) B' / sum)`
+/// with `B' = max(budget - idle floor_square(min), 0)`, so the texels' total is at most the
+/// budget whenever the budget covers the idle texels' minimum.
+pub fn budget_split(
+    budget: f32,
+    share: f32,
+    sum: f32,
+    contributing: u32,
+    idle: u32,
+    min_density: f32,
+) -> (f32, f32) {
+    let share = if share.is_finite() {
+        share.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let budget = if budget.is_finite() {
+        budget.max(0.0)
+    } else {
+        0.0
+    };
+    let lo = floor_square(min_density.max(1.0)) as f32;
+    let rest = (budget - lo * idle as f32).max(0.0);
+    let floor = if contributing > 0 {
+        share * rest / contributing as f32
+    } else {
+        0.0
+    };
+    let adaptive = (1.0 - share) * rest;
+    let scale = if sum.is_finite() && sum > adaptive {
+        adaptive / sum
     } else {
         1.0
     };
-    floor_square(d * s).max(floor_square(min_density.max(1.0))) as f32
+    (floor, scale)
+}
+
+/// A texel's density under the budget ([`budget_split`]): `max(floor, scale D')` for a
+/// contributing texel, `scale D'` for the others, at most `max_density` (0: none), at least the
+/// minimum's square. Not rounded: the texel sends [`photon_count`] photons.
+pub fn budget_density(
+    d: f32,
+    contributing: bool,
+    floor: f32,
+    scale: f32,
+    min_density: f32,
+    max_density: f32,
+) -> f32 {
+    let d = if d.is_finite() { d.max(0.0) } else { 0.0 };
+    let mut out = d * scale;
+    if contributing {
+        out = out.max(floor);
+    }
+    if max_density > 0.0 {
+        out = out.min(max_density);
+    }
+    let out = out.max(floor_square(min_density.max(1.0)) as f32);
+    if out.is_finite() {
+        out.min(16_777_216.0)
+    } else {
+        16_777_216.0
+    }
 }
 
 /// The starting (and, for a frozen task buffer, the permanent) uniform density: the budget

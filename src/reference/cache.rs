@@ -39,3 +39,12 @@ pub fn converged_recipe(scene: &str, size: u32) -> serde_json::Value {
         "roulette_depth": t.roulette_depth,
     })
 }
+
+/// The AAPS quality levels measured against these references by the report and by the
+/// budget test (`aaps_error_falls_with_budget`): (name, photon budget per light, target splat
+/// area in px).
+pub const AAPS_LEVELS: [(&str, u64, f32); 3] = [
+    ("low: 2^16/light, A_t 19", 1 << 16, 19.0),
+    ("medium: 2^18/light, A_t 4", 1 << 18, 4.0),
+    ("high: 2^20/light, A_t 1", 1 << 20, 1.0),
+];

@@ -81,6 +81,14 @@ fn optics_floor_square(d: f32) -> u32 {
 }
 
 
+// photon_count (src/optics/aaps.rs): floor(d), at most 2^24.
+fn optics_photon_count(d: f32) -> u32 {
+    if !(d > 0.0) || d > 3.0e38 {
+        return 0u;
+    }
+    return u32(floor(min(d, 16777216.0)));
+}
+
 // fresnel_schlick (src/optics/fresnel.rs).
 fn optics_fresnel_schlick(cos_i: f32, f0: vec3<f32>) -> vec3<f32> {
     let c = 1.0 - min(abs(cos_i), 1.0);
@@ -264,12 +272,43 @@ fn optics_blend_density(suggested: f32, previous: array<f32, 5>, count: u32, w_t
     return f32(max(max(optics_floor_square(d), optics_floor_square(lo)), 1u));
 }
 
-// scale_to_budget (src/optics/aaps.rs).
-fn optics_scale_to_budget(d: f32, sum: f32, budget: f32, min_density: f32) -> f32 {
-    var s = 1.0;
-    if sum > budget && sum > 0.0 && budget >= 0.0 && sum <= 3.4028235e38 {
-        s = budget / sum;
+// budget_split (src/optics/aaps.rs): (floor, scale) of the frame's budget.
+fn optics_budget_split(budget_in: f32, share_in: f32, sum: f32, contributing: u32, idle: u32, min_density: f32) -> vec2<f32> {
+    var share = 0.0;
+    if abs(share_in) <= 3.4028235e38 {
+        share = clamp(share_in, 0.0, 1.0);
     }
-    let lo = optics_floor_square(max(min_density, 1.0));
-    return f32(max(optics_floor_square(d * s), lo));
+    var budget = 0.0;
+    if abs(budget_in) <= 3.4028235e38 {
+        budget = max(budget_in, 0.0);
+    }
+    let lo = f32(optics_floor_square(max(min_density, 1.0)));
+    let rest = max(budget - lo * f32(idle), 0.0);
+    var floor_d = 0.0;
+    if contributing > 0u {
+        floor_d = share * rest / f32(contributing);
+    }
+    let adaptive = (1.0 - share) * rest;
+    var scale = 1.0;
+    if abs(sum) <= 3.4028235e38 && sum > adaptive {
+        scale = adaptive / sum;
+    }
+    return vec2(floor_d, scale);
+}
+
+// budget_density (src/optics/aaps.rs).
+fn optics_budget_density(d_in: f32, contributing: bool, floor_d: f32, scale: f32, min_density: f32, max_density: f32) -> f32 {
+    var d = 0.0;
+    if abs(d_in) <= 3.4028235e38 {
+        d = max(d_in, 0.0);
+    }
+    var out = d * scale;
+    if contributing {
+        out = max(out, floor_d);
+    }
+    if max_density > 0.0 {
+        out = min(out, max_density);
+    }
+    out = max(out, f32(optics_floor_square(max(min_density, 1.0))));
+    return select(16777216.0, min(out, 16777216.0), abs(out) <= 3.4028235e38);
 }

@@ -1,12 +1,16 @@
 // The AAPS task-buffer quadtree walk: WGSL twin of `SumQuadtree::walk` (src/optics/aaps.rs),
 // tested against it on lavapipe (tests/gpu.rs, wgsl_quadtree_walk_matches_rust).
 
-// leaf_sample_uv (src/optics/aaps.rs): sample `sample` of a leaf of `count` samples (a
-// k x k grid of cell centres) in texel `texel` of a `size x size` texture.
+// leaf_sample_uv (src/optics/aaps.rs): sample `sample` of texel `texel` of a `size x size`
+// texture, the R2 Kronecker set rotated per texel, in 0.32 fixed point (bit-exact with Rust).
 fn quadtree_leaf_sample_uv(texel: vec2<u32>, sample: u32, count: u32, size: u32) -> vec2<f32> {
-    let k = max(u32(round(sqrt(f32(max(count, 1u))))), 1u);
-    let cell = vec2(f32(sample % k), f32(min(sample / k, k - 1u))) + 0.5;
-    return (vec2<f32>(texel) + cell / f32(k)) / f32(max(size, 1u));
+    let id = texel.y * size + texel.x;
+    let h = optics_pcg_hash((id * 2654435761u) ^ 0x5bd1e995u);
+    let shift = vec2(h, optics_pcg_hash(h ^ 0x68e31da4u));
+    let step = vec2(3242174889u, 2447445414u);
+    let x = shift + sample * step + (step >> vec2(1u));
+    let cell = vec2<f32>(x >> vec2(8u)) * (1.0 / 16777216.0);
+    return (vec2<f32>(texel) + cell) / f32(max(size, 1u));
 }
 
 // Read-write so the AAPS build passes can share the binding (group 0, binding 7).

@@ -1,6 +1,7 @@
 //! The AAPS core (seed 004): equal-area map, quadtree, density update, splats.
 
 use super::*;
+use glam::UVec2;
 
 #[test]
 fn equal_area_mapping_round_trips_and_is_equal_area() {
@@ -52,7 +53,7 @@ fn quadtree_walk_covers_every_photon_once() {
     let mut rng = Pcg32::new(5, 5);
     let density: Vec<f32> = (0..size * size).map(|_| rng.next_f32() * 40.0).collect();
     let tree = SumQuadtree::build(&density, size).unwrap();
-    let expect: u32 = density.iter().map(|d| floor_square(*d)).sum();
+    let expect: u32 = density.iter().map(|d| photon_count(*d)).sum();
     assert_eq!(tree.total(), expect);
     let mut seen = std::collections::HashSet::new();
     let mut per_texel = vec![0u32; (size * size) as usize];
@@ -68,7 +69,7 @@ fn quadtree_walk_covers_every_photon_once() {
         );
     }
     for (i, d) in density.iter().enumerate() {
-        assert_eq!(per_texel[i], floor_square(*d));
+        assert_eq!(per_texel[i], photon_count(*d));
     }
     assert!(tree.walk(tree.total()).is_none());
     assert!(SumQuadtree::build(&density[..100], 10).is_none());
@@ -77,6 +78,12 @@ fn quadtree_walk_covers_every_photon_once() {
     assert_eq!(floor_square(9.0), 9);
     assert_eq!(floor_square(f32::NAN), 0);
     assert_eq!(floor_square(-1.0), 0);
+    assert_eq!(photon_count(8.9), 8);
+    assert_eq!(photon_count(0.5), 0);
+    assert_eq!(photon_count(f32::NAN), 0);
+    assert_eq!(photon_count(f32::INFINITY), 0);
+    assert_eq!(photon_count(-3.0), 0);
+    assert_eq!(photon_count(1e30), 16_777_216);
 }
 
 #[test]
@@ -157,6 +164,8 @@ fn aaps_settings_are_sanitized() {
         max_anisotropy: 0.5,
         max_bounces: 0,
         splat_capacity: 0,
+        budget_floor_share: 2.0,
+        point_splat_area: f32::NAN,
         ..Default::default()
     };
     let fixes = sanitize_aaps(&mut bad, &Default::default());
@@ -171,13 +180,17 @@ fn aaps_settings_are_sanitized() {
             "splat_scale",
             "max_anisotropy",
             "max_bounces",
-            "splat_capacity"
+            "splat_capacity",
+            "budget_floor_share",
+            "point_splat_area"
         ]
     );
     assert_eq!(bad.atlas_resolution, 128);
     assert_eq!(bad.target_area, 19.0);
     assert_eq!(bad.temporal_weight, 1.0);
     assert_eq!(bad.min_density, 1.0);
+    assert_eq!(bad.budget_floor_share, 1.0);
+    assert_eq!(bad.point_splat_area, 1.0);
     assert!(
         sanitize_aaps(&mut bad, &Default::default()).is_empty(),
         "a clamped value is valid"
@@ -201,4 +214,114 @@ fn splat_capacity_fits_the_binding_with_its_guard() {
     assert_eq!(splat_capacity(64, &limits), 64);
     assert_eq!(splat_capacity(0, &limits), 1);
     assert_eq!(splat_capacity(u32::MAX, &limits), cap);
+}
+
+/// The leaf samples (R2 set, rotated per texel): inside their texel for any count, the same on
+/// every call, spread evenly (every cell of a 4 x 4 grid holds 2 to 6 of 64 samples; a white-noise
+/// set fails this), and not the same lattice in neighbouring texels (the moiré of a grid).
+#[test]
+fn leaf_samples_are_low_discrepancy_and_rotated_per_texel() {
+    let size = 64u32;
+    for count in [1u32, 2, 3, 7, 16, 64, 1000, 1 << 20] {
+        for texel in [UVec2::ZERO, UVec2::new(63, 0), UVec2::new(17, 40)] {
+            for sample in [0, count / 2, count - 1] {
+                let uv = leaf_sample_uv(texel, sample, count, size);
+                assert!(
+                    (uv * size as f32).floor() == texel.as_vec2(),
+                    "count {count}, sample {sample} outside texel {texel}: {uv}"
+                );
+                assert_eq!(uv, leaf_sample_uv(texel, sample, count, size));
+            }
+        }
+    }
+    let local =
+        |texel: UVec2, i: u32| leaf_sample_uv(texel, i, 64, size) * size as f32 - texel.as_vec2();
+    for texel in [UVec2::ZERO, UVec2::new(5, 9), UVec2::new(63, 63)] {
+        let mut cells = [0u32; 16];
+        let mut mean = Vec2::ZERO;
+        for i in 0..64 {
+            let p = local(texel, i);
+            mean += p / 64.0;
+            cells[((p.y * 4.0) as usize).min(3) * 4 + ((p.x * 4.0) as usize).min(3)] += 1;
+        }
+        assert!(
+            cells.iter().all(|c| (2..=6).contains(c)),
+            "{texel}: {cells:?}"
+        );
+        assert!(
+            (mean - Vec2::splat(0.5)).length() < 0.05,
+            "{texel}: mean {mean}"
+        );
+    }
+    // Neighbouring texels: different rotations (a grid would repeat the same offsets).
+    let (a, b) = (local(UVec2::new(10, 10), 0), local(UVec2::new(11, 10), 0));
+    assert!((a - b).length() > 1e-3, "{a} {b}");
+    let mut offsets: Vec<u32> = (0..256)
+        .map(|x| (local(UVec2::new(x % 64, x / 64), 0).x * 64.0) as u32)
+        .collect();
+    offsets.sort_unstable();
+    offsets.dedup();
+    assert!(
+        offsets.len() > 40,
+        "first samples' x fall in {} of 64 bins",
+        offsets.len()
+    );
+}
+
+/// The budget: a floor of `share` over the contributing texels, the rest by D' scaled down; the
+/// texels' photons never exceed the budget once it covers the idle texels' minimum, the floor
+/// grows with the budget, share 0 is the thesis's scaling, and bad input stays finite.
+#[test]
+fn budget_split_spends_the_budget() {
+    let mut rng = Pcg32::new(3, 9);
+    let n = 4096usize;
+    // A quarter contributes; D' from 4 to 400.
+    let texels: Vec<(f32, bool)> = (0..n)
+        .map(|i| (4.0 + rng.next_f32() * 396.0, i % 4 == 0))
+        .collect();
+    let sum: f32 = texels.iter().map(|t| t.0).sum();
+    let contributing = texels.iter().filter(|t| t.1).count() as u32;
+    let idle = n as u32 - contributing;
+    let mut last_floor = 0.0;
+    for budget in [1u32 << 16, 1 << 18, 1 << 20, 1 << 22] {
+        for share in [0.0f32, 0.5, 1.0] {
+            let (floor, scale) = budget_split(budget as f32, share, sum, contributing, idle, 4.0);
+            assert!(floor.is_finite() && scale.is_finite() && (0.0..=1.0).contains(&scale));
+            let photons: u64 = texels
+                .iter()
+                .map(|&(d, c)| photon_count(budget_density(d, c, floor, scale, 4.0, 0.0)) as u64)
+                .sum();
+            assert!(
+                photons <= budget as u64,
+                "budget {budget}, share {share}: {photons}"
+            );
+            if share == 0.5 {
+                assert!(floor > last_floor, "the floor grows with the budget");
+                last_floor = floor;
+                // Every contributing texel gets at least the floor.
+                for &(d, c) in &texels {
+                    if c {
+                        assert!(budget_density(d, c, floor, scale, 4.0, 0.0) >= floor);
+                    }
+                }
+            }
+            if share == 0.0 {
+                assert_eq!(floor, 0.0);
+            }
+            if budget == 1 << 22 && share == 0.0 {
+                // Under budget the thesis's densities pass unchanged.
+                assert_eq!(scale, 1.0);
+            }
+        }
+    }
+    // Idle texels' minimum alone above the budget: no floor, everything at the minimum.
+    let (floor, scale) = budget_split(1000.0, 0.5, sum, contributing, idle, 4.0);
+    assert_eq!((floor, scale), (0.0, 0.0));
+    assert_eq!(budget_density(300.0, true, floor, scale, 4.0, 0.0), 4.0);
+    // Guards.
+    let (f, s) = budget_split(f32::NAN, f32::INFINITY, f32::NAN, 0, u32::MAX, f32::NAN);
+    assert!(f.is_finite() && s.is_finite());
+    assert!(budget_density(f32::NAN, true, 1e30, f32::INFINITY, 4.0, 0.0).is_finite());
+    assert_eq!(budget_density(-5.0, false, 0.0, 1.0, 4.0, 0.0), 4.0);
+    assert_eq!(budget_density(500.0, true, 1000.0, 1.0, 4.0, 300.0), 300.0);
 }

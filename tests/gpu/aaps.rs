@@ -2,6 +2,7 @@
 //! adaptive against a frozen uniform task buffer, stress, and nothing dispatched without work.
 
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
+use bevy_caustics::reference::cache::AAPS_LEVELS;
 use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
 use bevy_caustics::{AapsSettings, CausticsTechnique, scenes};
 use glam::Vec3;
@@ -130,6 +131,50 @@ fn aaps_adaptive_beats_frozen_uniform() {
         assert_eq!(nu, (side * side * texels) as u64, "{name}: uniform count");
         assert!(nu >= na, "{name}: the uniform run has fewer photons");
         assert!(ra < ru, "{name}: adaptive RMSE {ra} >= uniform {ru}");
+    }
+}
+
+/// AAPS's error falls with its budget: at the report's three levels (2^16 / 2^18 / 2^20 photons
+/// per light, target area 19 / 4 / 1 px) the RMSE against the cached reference falls at each
+/// step on `glass_sphere`, `ring` and `pool`, and the highest level's is at most 0.7x the
+/// lowest's; the energy stays within 5 % of the reference at every level.
+#[test]
+fn aaps_error_falls_with_budget() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    for name in ["glass_sphere", "ring", "pool"] {
+        let reference = reference(name);
+        let mut rmse = Vec::new();
+        for (level, photons, target_area) in AAPS_LEVELS {
+            let report = aaps(
+                name,
+                128,
+                Some(photons),
+                AapsSettings {
+                    target_area,
+                    ..Default::default()
+                },
+            );
+            let m = compare(report.caustics.as_ref().unwrap(), &reference, None).unwrap();
+            println!(
+                "{name} {level}: {} photons, RMSE {:.1} lx, FLIP {:.4}, energy {:+.2} %",
+                report.photons_traced,
+                m.rmse,
+                m.flip,
+                m.energy_error * 100.0
+            );
+            assert!(
+                m.energy_error.abs() < 0.05,
+                "{name} {level}: {}",
+                m.energy_error
+            );
+            rmse.push(m.rmse);
+        }
+        println!("{name}: highest / lowest RMSE {:.3}", rmse[2] / rmse[0]);
+        assert!(rmse[1] < rmse[0] && rmse[2] < rmse[1], "{name}: {rmse:?}");
+        assert!(rmse[2] <= 0.7 * rmse[0], "{name}: {rmse:?}");
     }
 }
 

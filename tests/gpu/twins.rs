@@ -418,8 +418,9 @@ fn aaps_test(@builtin(global_invocation_id) id: vec3<u32>) {
     let d = inputs[4u * i + 3u];
     let f0 = abs(d.xyz) / (vec3(1.0) + abs(d.xyz));
     let o = 9u * i;
-    outputs[o] = vec4(optics_fresnel_schlick(a.w, f0), 0.0);
-    outputs[o + 1u] = vec4(optics_beer_lambert(f0, b.w * 10.0, c.w * 10.0), 0.0);
+    let split = optics_budget_split(d.w * 100.0, a.w * 1.2 - 0.1, c.w * 4.0e5, i % 1000u, (i * 7u) % 3000u, 4.0);
+    outputs[o] = vec4(optics_fresnel_schlick(a.w, f0), split.x);
+    outputs[o + 1u] = vec4(optics_beer_lambert(f0, b.w * 10.0, c.w * 10.0), split.y);
     var prev: array<f32, 5>;
     prev[0] = b.w * 100.0;
     prev[1] = c.w * 100.0;
@@ -431,7 +432,7 @@ fn aaps_test(@builtin(global_invocation_id) id: vec3<u32>) {
         optics_spot_attenuation(a.w * 2.0 - 1.0, 0.9, 0.7),
         optics_suggested_density(b.w * 100.0, c.w * 50.0, d.w * 0.01 - 1.0, a.w * 2.0, 16.0),
         optics_blend_density(c.w * 300.0, prev, count, a.w, 4.0, select(0.0, 200.0, (i & 1u) == 1u)),
-        optics_scale_to_budget(d.w, c.w * 1.0e6, 5.0e5, 4.0),
+        optics_budget_density(d.w, (i & 2u) == 0u, c.w * 100.0, a.w, 4.0, select(0.0, 300.0, (i & 4u) == 0u)),
     );
     let tb = optics_orthonormal_basis(c.xyz);
     outputs[o + 3u] = vec4(tb[0], 0.0);
@@ -518,8 +519,28 @@ fn aaps_test(@builtin(global_invocation_id) id: vec3<u32>) {
         let max = if k % 2 == 1 { 200.0 } else { 0.0 };
         let bd = blend_density(c[3] * 300.0, &pairs, a[3], 4.0, max);
         assert_eq!(s[2], bd, "case {k}: blend");
-        let sb = scale_to_budget(d[3], c[3] * 1e6, 5e5, 4.0);
-        assert_eq!(s[3], sb, "case {k}: scale to budget");
+        let max = if k & 4 == 0 { 300.0 } else { 0.0 };
+        let bd = budget_density(d[3], k & 2 == 0, c[3] * 100.0, a[3], 4.0, max);
+        assert_eq!(s[3], bd, "case {k}: budget density");
+        let kk = k as u32;
+        let (fl, sc) = budget_split(
+            d[3] * 100.0,
+            a[3] * 1.2 - 0.1,
+            c[3] * 4e5,
+            kk % 1000,
+            (kk * 7) % 3000,
+            4.0,
+        );
+        assert!(
+            (f(4 * o + 3) - fl).abs() <= 1e-5 * (1.0 + fl),
+            "case {k}: budget floor {} vs {fl}",
+            f(4 * o + 3)
+        );
+        assert!(
+            (f(4 * (o + 1) + 3) - sc).abs() <= 1e-5 * (1.0 + sc),
+            "case {k}: budget scale {} vs {sc}",
+            f(4 * (o + 1) + 3)
+        );
         let (t, bb) = orthonormal_basis(xyz(c));
         check("basis t", v(o + 3), t, 1e-5);
         check("basis b", v(o + 4), bb, 1e-5);

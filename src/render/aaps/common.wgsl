@@ -50,6 +50,7 @@ const C_SPLIT: u32 = 15u;         // photons split at a dielectric
 const C_FLUX_CASTER: u32 = 16u;   // 4 words, f32 bits: luminous flux striking casters (first hit)
 const C_FLUX_DEPOSITED: u32 = 20u; // 4 words, f32 bits: flux reaching a diffuse surface (before culling)
 const C_FLUX_MAX_DEPTH: u32 = 24u; // 4 words, f32 bits: flux in flight at max bounces
+const C_CONTRIBUTING: u32 = 28u;  // texels with an accepted splat (density update)
 const ACCUM_TEXELS: u32 = 32u;    // per texel: area sum (f32 bits), accepted count, variance (f32 bits), 0
 
 fn accum_add_f32(i: u32, v: f32) {

@@ -9,13 +9,14 @@ struct AapsParams {
     density: vec4<f32>,  // target area (px), variance gain, w_t, min density
     limits: vec4<f32>,   // max density (0: none), photon budget, cull solid angle (sr, 0: off), max anisotropy
     splat: vec4<f32>,    // MSAA threshold (px), min radius, max radius (m), 1: drop large splats
+    budget: vec4<f32>,   // budget floor share, point splat area (px), 0, 0
 }
 
 // A splat (64 bytes). Also the photon record of the variance pass (seed 004 section 3.1.5):
 // world position, atlas texel and energy fraction live in it.
 struct AapsSplat {
     center: vec4<f32>, // xyz world position, w bitcast atlas texel index
-    a: vec4<f32>,      // major semi-axis (world), w bitcast 1 for a small (MSAA) splat
+    a: vec4<f32>,      // major semi-axis (world), w bitcast 1 for a small (MSAA) splat, 2 for a point
     b: vec4<f32>,      // minor semi-axis (world), w energy fraction of its texel
     e: vec4<f32>,      // irradiance (lux) rgb, w projected area (px)
 }

@@ -24,7 +24,7 @@ fn qt_leaves(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= a * a {
         return;
     }
-    qt_levels[id.x] = select(0u, optics_floor_square(density[id.x]), texel_valid(id.x));
+    qt_levels[id.x] = select(0u, optics_photon_count(density[id.x]), texel_valid(id.x));
 }
 
 fn add_sat(x: u32, y: u32) -> u32 {
@@ -131,7 +131,10 @@ fn density_update(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = atomicLoad(&accum[base + 1u]);
     let area = select(0.0, accum_f32(base) / f32(n), n > 0u);
     let v = accum_f32(base + 2u);
-    let sent = f32(optics_floor_square(density[id.x]));
+    let sent = f32(optics_photon_count(density[id.x]));
+    if n > 0u {
+        atomicAdd(&accum[C_CONTRIBUTING], 1u);
+    }
     let suggested = optics_suggested_density(sent, area, params.density.x, v, params.density.y);
     let x = id.x % a;
     let y = id.x / a;
@@ -157,7 +160,8 @@ fn density_update(@builtin(global_invocation_id) id: vec3<u32>) {
     accum_add_f32(C_DENSITY_SUM, d);
 }
 
-// The frame's photon budget caps the total (ours: the quality preset is a ceiling).
+// The frame's photon budget (ours, optics::budget_split): a floor of `params.budget.x` of it
+// over the texels whose photons reached a visible receiver, the rest by D', scaled down.
 @compute @workgroup_size(64)
 fn density_scale(@builtin(global_invocation_id) id: vec3<u32>) {
     let a = params.atlas.x;
@@ -168,5 +172,9 @@ fn density_scale(@builtin(global_invocation_id) id: vec3<u32>) {
         density[id.x] = 0.0;
         return;
     }
-    density[id.x] = optics_scale_to_budget(density_next[id.x], accum_f32(C_DENSITY_SUM), params.limits.y, params.density.w);
+    let contributing = atomicLoad(&accum[C_CONTRIBUTING]);
+    let texels = params.atlas.y * params.atlas.y * params.atlas.w;
+    let split = optics_budget_split(params.limits.y, params.budget.x, accum_f32(C_DENSITY_SUM), contributing, texels - min(contributing, texels), params.density.w);
+    let here = atomicLoad(&accum[ACCUM_TEXELS + 4u * id.x + 1u]) > 0u;
+    density[id.x] = optics_budget_density(density_next[id.x], here, split.x, split.y, params.density.w, params.limits.x);
 }

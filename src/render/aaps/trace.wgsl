@@ -158,7 +158,9 @@ fn deposit(path: ptr<function, Path>, pos: vec3<f32>, pu: vec3<f32>, pv: vec3<f3
         atomicAdd(&accum[C_OVERFLOW], 1u);
         return;
     }
-    let small = params.caps.w != 0u && area_px < params.splat.x;
+    // Point splats (AapsSettings::point_splat_area) go to the plain list as one-pixel quads.
+    let point = area_px < params.budget.y;
+    let small = !point && params.caps.w != 0u && area_px < params.splat.x;
     var idx = 0u;
     if small {
         idx = cap - 1u - atomicAdd(&accum[C_SMALL], 1u);
@@ -168,7 +170,7 @@ fn deposit(path: ptr<function, Path>, pos: vec3<f32>, pu: vec3<f32>, pv: vec3<f3
     let frac = select(0.0, luminance(flux) / texel_energy, texel_energy > 0.0);
     splats[idx] = AapsSplat(
         vec4(pos, bitcast<f32>(texel)),
-        vec4(s.a, bitcast<f32>(select(0u, 1u, small))),
+        vec4(s.a, bitcast<f32>(select(select(0u, 2u, point), 1u, small))),
         vec4(s.b, frac),
         vec4(e, area_px),
     );
@@ -323,10 +325,11 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     atomicAdd(&accum[C_EMITTED], 1u);
     let tile = params.atlas.y;
     let local = w.xy % vec2(tile);
-    let k = max(u32(round(sqrt(f32(w.w)))), 1u);
     let uv = quadtree_leaf_sample_uv(local, w.z, w.w, tile);
-    // Differentials: one grid step along each parameter (inwards at the square's far edges).
-    let delta = 1.0 / (f32(tile) * f32(k));
+    // Differentials: the spacing of the texel's samples, 1 / sqrt(count) of a texel, along each
+    // parameter (inwards at the square's far edges), so splats shrink as the density grows and
+    // their overlap stays the same.
+    let delta = 1.0 / (f32(tile) * sqrt(f32(max(w.w, 1u))));
     let uv_u = vec2(select(uv.x + delta, uv.x - delta, uv.x + delta > 1.0), uv.y);
     let uv_v = vec2(uv.x, select(uv.y + delta, uv.y - delta, uv.y + delta > 1.0));
     let light = lights[light_index];

@@ -254,7 +254,7 @@ impl AapsViewState {
 }
 
 /// Size of `AapsParams` in bytes.
-pub const PARAMS_BYTES: usize = 240;
+pub const PARAMS_BYTES: usize = 256;
 
 /// The bytes of `AapsParams` (params.wgsl).
 #[allow(clippy::too_many_arguments)]
@@ -322,6 +322,9 @@ pub fn params_bytes(
         scene_scale * 4.0,
         s.drop_large_splats as u32 as f32,
     ] {
+        f(v);
+    }
+    for v in [s.budget_floor_share, s.point_splat_area, 0.0, 0.0] {
         f(v);
     }
     b
