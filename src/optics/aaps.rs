@@ -156,8 +156,8 @@ impl SumQuadtree {
 /// point, so that `n a mod 1` is exact for every sample index.
 pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 
-/// Where sample `sample` of a leaf with `count` samples lies in the unit square of the whole
-/// texture (`size x size` texels): point `sample` of the R2 Kronecker set
+/// Where sample `sample` of a leaf lies in the unit square of the whole texture (`size x size`
+/// texels): point `sample` of the R2 Kronecker set
 /// `frac(s + (i + 1/2) (1/g, 1/g^2))`, shifted by `s`, a per-texel Cranley-Patterson rotation
 /// (two [`pcg_hash`]es of the texel index).
 ///
@@ -166,11 +166,10 @@ pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 /// set is low-discrepancy for any count (so densities need not be squares, [`photon_count`]),
 /// and the per-texel rotation makes neighbouring texels' patterns independent; each point is
 /// uniform over its texel (so a photon's energy `power / count` is unbiased). Fixed per texel
-/// and count, so a settled task buffer gives the same image every frame. Exact in 0.32 fixed
-/// point (wrapping integer arithmetic), so the WGSL twin `quadtree_leaf_sample_uv` gives the
-/// same bits.
-pub fn leaf_sample_uv(texel: UVec2, sample: u32, count: u32, size: u32) -> Vec2 {
-    let _ = count;
+/// (a texel's first `n` points are the same whatever its count), so a settled task buffer
+/// gives the same image every frame. Exact in 0.32 fixed point (wrapping integer arithmetic),
+/// so the WGSL twin `quadtree_leaf_sample_uv` gives the same bits.
+pub fn leaf_sample_uv(texel: UVec2, sample: u32, size: u32) -> Vec2 {
     let id = texel.y.wrapping_mul(size).wrapping_add(texel.x);
     let h = pcg_hash(id.wrapping_mul(2_654_435_761) ^ 0x5bd1_e995);
     let shift = [h, pcg_hash(h ^ 0x68e3_1da4)];

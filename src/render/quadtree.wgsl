@@ -3,7 +3,7 @@
 
 // leaf_sample_uv (src/optics/aaps.rs): sample `sample` of texel `texel` of a `size x size`
 // texture, the R2 Kronecker set rotated per texel, in 0.32 fixed point (bit-exact with Rust).
-fn quadtree_leaf_sample_uv(texel: vec2<u32>, sample: u32, count: u32, size: u32) -> vec2<f32> {
+fn quadtree_leaf_sample_uv(texel: vec2<u32>, sample: u32, size: u32) -> vec2<f32> {
     let id = texel.y * size + texel.x;
     let h = optics_pcg_hash((id * 2654435761u) ^ 0x5bd1e995u);
     let shift = vec2(h, optics_pcg_hash(h ^ 0x68e31da4u));

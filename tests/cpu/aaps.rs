@@ -62,7 +62,7 @@ fn quadtree_walk_covers_every_photon_once() {
         assert!(sample < count);
         assert!(seen.insert((texel, sample)), "task {task} repeats a photon");
         per_texel[(texel.y * size + texel.x) as usize] += 1;
-        let uv = leaf_sample_uv(texel, sample, count, size);
+        let uv = leaf_sample_uv(texel, sample, size);
         assert!(
             (uv * size as f32).floor() == texel.as_vec2(),
             "sample outside its texel"
@@ -225,17 +225,17 @@ fn leaf_samples_are_low_discrepancy_and_rotated_per_texel() {
     for count in [1u32, 2, 3, 7, 16, 64, 1000, 1 << 20] {
         for texel in [UVec2::ZERO, UVec2::new(63, 0), UVec2::new(17, 40)] {
             for sample in [0, count / 2, count - 1] {
-                let uv = leaf_sample_uv(texel, sample, count, size);
+                let uv = leaf_sample_uv(texel, sample, size);
                 assert!(
                     (uv * size as f32).floor() == texel.as_vec2(),
                     "count {count}, sample {sample} outside texel {texel}: {uv}"
                 );
-                assert_eq!(uv, leaf_sample_uv(texel, sample, count, size));
+                assert_eq!(uv, leaf_sample_uv(texel, sample, size));
             }
         }
     }
     let local =
-        |texel: UVec2, i: u32| leaf_sample_uv(texel, i, 64, size) * size as f32 - texel.as_vec2();
+        |texel: UVec2, i: u32| leaf_sample_uv(texel, i, size) * size as f32 - texel.as_vec2();
     for texel in [UVec2::ZERO, UVec2::new(5, 9), UVec2::new(63, 63)] {
         let mut cells = [0u32; 16];
         let mut mean = Vec2::ZERO;

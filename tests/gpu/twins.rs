@@ -338,7 +338,7 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&walks) / 2u { return; }
     let w = quadtree_walk(32u, id.x);
     walks[2u * id.x] = w;
-    walks[2u * id.x + 1u] = vec4(bitcast<vec2<u32>>(quadtree_leaf_sample_uv(w.xy, w.z, w.w, 32u)), 0u, 0u);
+    walks[2u * id.x + 1u] = vec4(bitcast<vec2<u32>>(quadtree_leaf_sample_uv(w.xy, w.z, 32u)), 0u, 0u);
 }
 "#;
     let src = format!(
@@ -377,7 +377,7 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
                     f32::from_bits(u(8 * task + 4)),
                     f32::from_bits(u(8 * task + 5)),
                 );
-                let want = bevy_caustics::optics::leaf_sample_uv(texel, sample, count, size);
+                let want = bevy_caustics::optics::leaf_sample_uv(texel, sample, size);
                 worst_uv = worst_uv.max((uv - want).abs().max_element());
                 assert!(
                     (uv - want).abs().max_element() < 1e-6,

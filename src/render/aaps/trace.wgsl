@@ -325,7 +325,7 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     atomicAdd(&accum[C_EMITTED], 1u);
     let tile = params.atlas.y;
     let local = w.xy % vec2(tile);
-    let uv = quadtree_leaf_sample_uv(local, w.z, w.w, tile);
+    let uv = quadtree_leaf_sample_uv(local, w.z, tile);
     // Differentials: the spacing of the texel's samples, 1 / sqrt(count) of a texel, along each
     // parameter (inwards at the square's far edges), so splats shrink as the density grows and
     // their overlap stays the same.
