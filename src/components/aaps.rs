@@ -44,8 +44,8 @@ pub struct AapsSettings {
     /// added. Default 4 px (ours). 0 switches it off. Cost: one resolve per frame.
     pub msaa_threshold: f32,
     /// Size of a splat relative to its photon's footprint: the ellipse's semi-axes are this
-    /// times the singular values of the two differential offsets (which span one grid cell of
-    /// the photon's texel). The thesis leaves it open. Default 1.5 (ours: on the test scenes
+    /// times the singular values of the two differential offsets (which span the sample
+    /// spacing of the photon's texel). The thesis leaves it open. Default 1.5 (ours: on the test scenes
     /// at 128², 1.0 leaves sub-pixel gaps, RMSE 321 on `glass_sphere`; 1.5 gives 164, 2.5 gives
     /// 102 but blurs, FLIP 0.029 → 0.032 and 0.049 → 0.089 on `ring`). Range [0.1, 16].
     pub splat_scale: f32,

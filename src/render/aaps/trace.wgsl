@@ -1,9 +1,9 @@
 // AAPS emit and trace (seed 004 sections 2.3.1, 3.1.2, 3.2.1, 3.3.1, 3.3.2, 3.3.5): one thread
-// per task id walks the density quadtree to its texel and grid sample, emits a photon with two
-// differential rays, traces it through the BVH (split once at the first dielectric into its
-// Fresnel-weighted halves, then every later dielectric interaction chosen by Fresnel
-// probability with the flux unchanged, the differentials following the chosen branch), and at
-// the first diffuse hit appends an anisotropic splat.
+// per task id walks the density quadtree to its texel and sample (optics::leaf_sample_uv),
+// emits a photon with two differential rays, traces it through the BVH (split once at the first
+// dielectric into its Fresnel-weighted halves, then every later dielectric interaction chosen
+// by Fresnel probability with the flux unchanged, the differentials following the chosen
+// branch), and at the first diffuse hit appends an anisotropic splat.
 //
 // Why not the thesis's "the previous interaction repeats": a path that refracted into a gem and
 // must reflect many times inside it before it leaves loses R^k of its energy at every repeat
