@@ -39,12 +39,12 @@ fn splat_vertex(s: AapsSplat, vi: u32) -> VOut {
     if bitcast<u32>(s.a.w) == 2u {
         // A point splat: a quad of 0.8 px around the centre of the pixel holding the splat's
         // centre, so it covers exactly that pixel; irradiance E area_px puts its whole flux there.
-        let c = params.clip_from_world * vec4(s.center.xyz, 1.0);
         let size = params.viewport.xy;
-        let px = floor(aaps_to_pixel(params.clip_from_world, s.center.xyz, size).xy) + 0.5 + 0.4 * q;
+        let p = aaps_to_pixel(params.clip_from_world, s.center.xyz, size);
+        let px = floor(p.xy) + 0.5 + 0.4 * q;
         let ndc = vec2(px.x / size.x * 2.0 - 1.0, 1.0 - px.y / size.y * 2.0);
         // Behind the eye: a degenerate quad outside the clip volume.
-        out.pos = select(vec4(2.0, 2.0, 2.0, 1.0), vec4(ndc, 0.5, 1.0), c.w > 0.0);
+        out.pos = select(vec4(2.0, 2.0, 2.0, 1.0), vec4(ndc, 0.5, 1.0), p.z > 0.0);
         out.q = vec2(0.0);
         out.world = s.center.xyz;
         out.e = s.e.xyz * max(s.e.w, 0.0);
@@ -69,8 +69,7 @@ fn vs_small(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) ->
     return VOutSample(v.pos, v.q, v.world, v.e);
 }
 
-// The scene point seen through pixel `frag` (world), and its distance from the eye; w = 0 when
-// it cannot be found.
+// The scene point seen through pixel `frag` (world, w = 1); w = 0 when it cannot be found.
 fn scene_point(frag: vec4<f32>) -> vec4<f32> {
     let size = vec2<f32>(textureDimensions(view_depth));
     let px = vec2<i32>(clamp(floor(frag.xy), vec2(0.0), size - 1.0));
