@@ -107,6 +107,10 @@ pub struct VolumeCounters {
     pub ignored: u64,
     /// Non-contributive photons stopped on diffuse surfaces.
     pub absorbed: u64,
+    /// Photons that left the volume still inside a dielectric (no surface let them out).
+    pub left_inside: u64,
+    /// Their luminous flux, lm.
+    pub left_inside_lm: f64,
 }
 
 impl VolumeCounters {
@@ -130,6 +134,8 @@ impl VolumeCounters {
             reflected: u(12),
             ignored: u(13),
             absorbed: u(14),
+            left_inside: u(15),
+            left_inside_lm: f(16),
         }
     }
 }

@@ -62,6 +62,38 @@ pub fn gem_room() -> SceneDesc {
     )
 }
 
+/// The brilliant of [`gem_room`] 0.8 m above an open floor under the same spot, seen from
+/// above. No closed form: a brilliant sends most of its light back up, so the floor's caustic
+/// depends on where every path leaves the gem, which a closed room cannot tell (its walls take
+/// the light wherever it goes). Checked against the reference.
+pub fn gem_floor() -> SceneDesc {
+    let eye = Vec3::new(0.0, 4.0, 3.0);
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::ZERO),
+        fov_y: 60f32.to_radians(),
+    };
+    let mut s = SceneDesc::new("gem_floor", cam);
+    let grey = s.material("floor", diffuse(0.8), false);
+    let g = s.material("glass", glass(2.4, 1.0), false);
+    s.add("floor", geometry::quad(20.0, 20.0), grey, Vec3::ZERO);
+    let at = Vec3::new(0.0, 0.8, 0.0);
+    s.add("gem", geometry::brilliant(0.5), g, at);
+    let light = at + Vec3::new(0.3, 1.4, 0.2);
+    s.lights.push(LightDesc {
+        name: "spot".into(),
+        kind: LightKind::Spot {
+            candela: 20_000.0,
+            inner: 0.25,
+            outer: 0.4,
+        },
+        color: Vec3::ONE,
+        translation: light,
+        rotation: shine_along((at - light).normalize()),
+    });
+    s
+}
+
 /// A smooth ball (radius 0.5 m, IOR 4.0: 36 % reflected at normal incidence) in a closed room
 /// lit by a point light.
 pub fn ball_room() -> SceneDesc {

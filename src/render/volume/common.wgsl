@@ -72,6 +72,8 @@ const C_REFRACTED: u32 = 11u;
 const C_REFLECTED: u32 = 12u;
 const C_IGNORED: u32 = 13u;    // transmissive hits the media rules ignored
 const C_ABSORBED: u32 = 14u;   // non-contributive photons stopped on diffuse surfaces
+const C_LEFT_INSIDE: u32 = 15u; // photons leaving the volume still inside a dielectric (P_med)
+const C_LEFT_INSIDE_LM: u32 = 16u; // f32 bits: their luminous flux
 
 fn vol_axis(i: u32) -> vec3<f32> {
     if i == 0u {

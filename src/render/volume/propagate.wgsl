@@ -117,6 +117,23 @@ fn set_end(p: ptr<function, VolPhoton>, end: u32) {
     (*p).dir.w = bitcast<f32>(f);
 }
 
+// Interactions a photon inside a dielectric may have in one slab (outside one: two).
+const VOL_SEGMENTS: u32 = 16u;
+
+// Where (ray parameter) the photon's signed depth below a surface, `s0` at `t0` and `s1` at
+// `t1` (each against the surface of its own column, so a sloped surface is found when the
+// photon crosses it sideways), changes sign; -1 when it does not.
+fn crossing(s0: f32, s1: f32, t0: f32, t1: f32) -> f32 {
+    if !((s0 < 0.0 && s1 >= 0.0) || (s0 > 0.0 && s1 <= 0.0)) {
+        return -1.0;
+    }
+    let ds = s1 - s0;
+    if !(abs(ds) > 0.0) {
+        return t1;
+    }
+    return clamp(t0 - s0 / ds * (t1 - t0), t0, t1);
+}
+
 fn flags_of(p: VolPhoton) -> u32 {
     return bitcast<u32>(p.dir.w);
 }
@@ -204,6 +221,12 @@ fn advance(p: ptr<function, VolPhoton>, len: f32) {
 // Leave the volume through face `code`: to its projector when contributive and an exit face.
 fn leave(p: ptr<function, VolPhoton>, code: u32, i: u32) {
     let flags = flags_of(*p);
+    if (flags & F_MEDIUM) != 0u {
+        // Still inside a dielectric: no surface let it out, so its direction is not the one
+        // it would leave with. Counted (a closed object's path ended without its last events).
+        count(C_LEFT_INSIDE);
+        count_add_f32(C_LEFT_INSIDE_LM, dot((*p).flux.xyz, vec3(0.2126, 0.7152, 0.0722)));
+    }
     let exit_face = (vp.counts.z & (1u << code)) != 0u;
     if (flags & F_CONTRIB) != 0u {
         if exit_face {
@@ -216,6 +239,171 @@ fn leave(p: ptr<function, VolPhoton>, code: u32, i: u32) {
         set_end(p, END_GONE);
     }
     finals[i] = *p;
+}
+
+// The march of one photon through slab `j` (box `lo`..`hi`, local coordinates) against the
+// slab's G_near / G_far, from `*q_io` along `*dq_io`, with its interactions. Returns true when
+// the path ended there (`*p_out` holds the final state); false when it flies on to the slab's
+// boundary from `*q_io` along `*dq_io`.
+fn march_slab(p_out: ptr<function, VolPhoton>, q_io: ptr<function, vec3<f32>>, dq_io: ptr<function, vec3<f32>>, rng: ptr<function, u32>, j: u32, lo: vec3<f32>, hi: vec3<f32>, eps: f32) -> bool {
+    var p = *p_out;
+    var q = *q_io;
+    var dq = *dq_io;
+    let h = vol_half();
+    let res = f32(vp.dims.x);
+    // One slab texel, local units.
+    let texel_w = 2.0 * max(h[vp.lay.y], h[vp.lay.z]) / res;
+    let near_layer = 2u * j;
+    let far_layer = near_layer + 1u;
+    // Interactions in this slab. Outside a dielectric: 0, marching against G_near; 1, against
+    // G_far after the first interaction (the seed's "second interaction for thin objects");
+    // 2, done. Inside one (P_med), the next surface is whichever of the column's G_near and
+    // G_far the march crosses, up to VOL_SEGMENTS interactions: the seed stops after two, so a
+    // photon totally reflected once inside a gem flew on through its far side and lit the
+    // floor where the gem sends light back up (+8 % of the caustic on an open brilliant).
+    var phase = 0u;
+    var exit = vec2(0.0);
+    for (var segment = 0u; segment < VOL_SEGMENTS; segment += 1u) {
+        exit = box_exit(q, dq, lo, hi);
+        let t_end = exit.x;
+        let inside = (flags_of(p) & F_MEDIUM) != 0u;
+        if (phase >= 2u && !inside) || t_end <= 0.0 {
+            break;
+        }
+        let span = max(abs(dq[vp.lay.y]) / h[vp.lay.y], abs(dq[vp.lay.z]) / h[vp.lay.z]) * t_end * 0.5 * res;
+        let limit = 4u * vp.dims.x;
+        var n = u32(clamp(ceil(span), 1.0, f32(limit))) + 1u;
+        if span > f32(limit) {
+            count(C_STEP_LIMIT);
+        }
+        var prev_w = depth_of(q);
+        var prev_t = 0.0;
+        var restarted = false;
+        let px0 = slab_texel(q);
+        var prev_gn = decode(textureLoad(slab_gbuf, px0, near_layer, 0));
+        var prev_gf = decode(textureLoad(slab_gbuf, px0, far_layer, 0));
+        for (var k = 1u; k <= n; k += 1u) {
+            let t = t_end * f32(k) / f32(n);
+            let qs = q + dq * t;
+            let ws = depth_of(qs);
+            let px = slab_texel(qs);
+            let gn = decode(textureLoad(slab_gbuf, px, near_layer, 0));
+            let gf = decode(textureLoad(slab_gbuf, px, far_layer, 0));
+            var hit = false;
+            var hit_depth = 0.0;
+            var g: GSample;
+            var th_inside = -1.0;
+            if inside {
+                // The nearer of the two surfaces the step crosses (not the one just left),
+                // each compared with its own column's depth at both ends of the step.
+                var tn = -1.0;
+                var tf = -1.0;
+                // A jump of the surface's depth between the two columns larger than a steep
+                // (4:1) slope is another surface taking its place (the slab planes clip objects,
+                // so a column's near or far surface changes identity), not a crossing.
+                let jump = 4.0 * texel_w + abs(ws - prev_w);
+                if gn.valid && prev_gn.valid && abs(gn.depth - prev_gn.depth) <= jump {
+                    tn = crossing(prev_w - prev_gn.depth, ws - gn.depth, prev_t, t);
+                }
+                if gf.valid && prev_gf.valid && abs(gf.depth - prev_gf.depth) <= jump {
+                    tf = crossing(prev_w - prev_gf.depth, ws - gf.depth, prev_t, t);
+                }
+                if tf > eps && (tn <= eps || tf < tn) {
+                    g = gf;
+                    th_inside = tf;
+                } else if tn > eps {
+                    g = gn;
+                    th_inside = tn;
+                }
+                hit = th_inside >= 0.0;
+                hit_depth = g.depth;
+            } else if phase == 0u && gn.valid && ws >= gn.depth {
+                // Crossed this column's near surface since the last sample, or lies inside
+                // the near-far shell (entered from the side).
+                let in_shell = gf.valid && ws <= gf.depth + eps;
+                if prev_w < gn.depth || in_shell {
+                    hit = true;
+                    hit_depth = gn.depth;
+                    g = gn;
+                }
+            } else if phase == 1u && gf.valid {
+                let a = prev_w - gf.depth;
+                let b = ws - gf.depth;
+                if (a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0) {
+                    hit = true;
+                    hit_depth = gf.depth;
+                    g = gf;
+                }
+            }
+            if hit {
+                // The point of the segment at the surface's depth.
+                let dw = ws - prev_w;
+                var th = t;
+                if th_inside >= 0.0 {
+                    th = th_inside;
+                } else if abs(dw) > 0.0 {
+                    th = clamp(prev_t + (hit_depth - prev_w) / dw * (t - prev_t), prev_t, t);
+                }
+                let qh = q + dq * th;
+                let nl = length(g.normal);
+                var p2 = p;
+                p2.pos = vec4(vol_world(qh), p.pos.w);
+                advance(&p2, th);
+                let r = interact(&p2, g.normal / max(nl, 1e-20), g.inst, rng);
+                if r == 0u {
+                    prev_w = ws;
+                    prev_t = t;
+                    prev_gn = gn;
+                    prev_gf = gf;
+                    continue;
+                }
+                p = p2;
+                if r == 2u {
+                    *p_out = p;
+                    return true;
+                }
+                q = qh;
+                dq = vol_local_dir(p.dir.xyz);
+                let l2 = length(dq);
+                if !(l2 > 0.0) || !vol_finite3(dq) {
+                    count(C_NAN);
+                    set_end(&p, END_GONE);
+                    *p_out = p;
+                    return true;
+                }
+                dq /= l2;
+                phase += 1u;
+                restarted = true;
+                break;
+            }
+            prev_w = ws;
+            prev_t = t;
+            prev_gn = gn;
+            prev_gf = gf;
+        }
+        if !restarted {
+            break;
+        }
+    }
+    *p_out = p;
+    *q_io = q;
+    *dq_io = dq;
+    return false;
+}
+
+// The box of slab `j` in the volume's local coordinates (rows: min, max).
+fn slab_bounds(j: u32) -> mat2x3<f32> {
+    let h = vol_half();
+    let e = vp.lay.x;
+    let s = entry_sign();
+    let thick = 2.0 * h[e] / f32(vp.counts.y);
+    let qa = s * (h[e] - thick * f32(j + 1u));
+    let qb = s * (h[e] - thick * f32(j));
+    var lo = -h;
+    var hi = h;
+    lo[e] = min(qa, qb);
+    hi[e] = max(qa, qb);
+    return mat2x3(lo, hi);
 }
 
 @compute @workgroup_size(64)
@@ -243,16 +431,8 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = vp.lay.x;
     let s = entry_sign();
     let thick = 2.0 * h[e] / f32(slabs);
-    let w0 = thick * f32(slab);
-    let w1 = w0 + thick;
-    // The slab's box in local coordinates.
-    let qa = s * (h[e] - w1);
-    let qb = s * (h[e] - w0);
-    var lo = -h;
-    var hi = h;
-    lo[e] = min(qa, qb);
-    hi[e] = max(qa, qb);
-    var q = clamp(vol_local(p.pos.xyz), lo, hi);
+    let first = slab_bounds(slab);
+    var q = clamp(vol_local(p.pos.xyz), first[0], first[1]);
     var dq = vol_local_dir(p.dir.xyz);
     let dl = length(dq);
     if !vol_finite3(q) || !(dl > 0.0) || !(dl <= 3.0e38) || !vol_finite3(p.flux.xyz) {
@@ -262,114 +442,37 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     dq /= dl;
-    let res = f32(vp.dims.x);
-    let near_layer = 2u * slab;
-    let far_layer = near_layer + 1u;
-    let scale = vp.centre.w;
-    let eps = max(1e-6 * scale, 1e-4 * thick);
-    // 0: marching against G_near, 1: against G_far after the first interaction, 2: done.
-    var phase = 0u;
-    var exit = vec2(0.0);
-    for (var segment = 0u; segment < 4u; segment += 1u) {
-        exit = box_exit(q, dq, lo, hi);
-        let t_end = exit.x;
-        if phase >= 2u || t_end <= 0.0 {
-            break;
-        }
-        let span = max(abs(dq[vp.lay.y]) / h[vp.lay.y], abs(dq[vp.lay.z]) / h[vp.lay.z]) * t_end * 0.5 * res;
-        let limit = 4u * vp.dims.x;
-        var n = u32(clamp(ceil(span), 1.0, f32(limit))) + 1u;
-        if span > f32(limit) {
-            count(C_STEP_LIMIT);
-        }
-        var prev_w = depth_of(q);
-        var prev_t = 0.0;
-        var restarted = false;
-        for (var k = 1u; k <= n; k += 1u) {
-            let t = t_end * f32(k) / f32(n);
-            let qs = q + dq * t;
-            let ws = depth_of(qs);
-            let px = slab_texel(qs);
-            let gn = decode(textureLoad(slab_gbuf, px, near_layer, 0));
-            let gf = decode(textureLoad(slab_gbuf, px, far_layer, 0));
-            var hit = false;
-            var hit_depth = 0.0;
-            var g: GSample;
-            if phase == 0u && gn.valid && ws >= gn.depth {
-                // Crossed this column's near surface since the last sample, or lies inside
-                // the near-far shell (entered from the side).
-                let in_shell = gf.valid && ws <= gf.depth + eps;
-                if prev_w < gn.depth || in_shell {
-                    hit = true;
-                    hit_depth = gn.depth;
-                    g = gn;
-                }
-            } else if phase == 1u && gf.valid {
-                let a = prev_w - gf.depth;
-                let b = ws - gf.depth;
-                if (a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0) {
-                    hit = true;
-                    hit_depth = gf.depth;
-                    g = gf;
-                }
-            }
-            if hit {
-                // The point of the segment at the surface's depth.
-                let dw = ws - prev_w;
-                var th = t;
-                if abs(dw) > 0.0 {
-                    th = clamp(prev_t + (hit_depth - prev_w) / dw * (t - prev_t), prev_t, t);
-                }
-                let qh = q + dq * th;
-                let nl = length(g.normal);
-                var p2 = p;
-                p2.pos = vec4(vol_world(qh), p.pos.w);
-                advance(&p2, th);
-                let r = interact(&p2, g.normal / max(nl, 1e-20), g.inst, &rng);
-                if r == 0u {
-                    prev_w = ws;
-                    prev_t = t;
-                    continue;
-                }
-                p = p2;
-                if r == 2u {
-                    finals[i] = p;
-                    return;
-                }
-                q = qh;
-                dq = vol_local_dir(p.dir.xyz);
-                let l2 = length(dq);
-                if !(l2 > 0.0) || !vol_finite3(dq) {
-                    count(C_NAN);
-                    set_end(&p, END_GONE);
-                    finals[i] = p;
-                    return;
-                }
-                dq /= l2;
-                phase += 1u;
-                restarted = true;
-                break;
-            }
-            prev_w = ws;
-            prev_t = t;
-        }
-        if !restarted {
-            break;
-        }
-    }
-    // Fly to the slab's boundary.
-    exit = box_exit(q, dq, lo, hi);
-    let qe = q + dq * exit.x;
-    advance(&p, exit.x);
-    p.pos = vec4(vol_world(qe), p.pos.w);
-    p.dir = vec4(vol_world_dir(dq), p.dir.w);
-    let code = u32(exit.y);
-    let axis = code / 2u;
+    let eps = max(1e-6 * vp.centre.w, 1e-4 * thick);
     let entry_code = 2u * e + vp.lay.w;
-    if axis == e {
-        // Deeper (towards the face opposite the entry) or back towards the entry.
-        let deeper = -s * dq[e] > 0.0;
-        if deeper {
+    // The slab marched: this dispatch's, or an earlier one the photon turned back into (their
+    // G-buffers are drawn before this slab's). The seed carries photons forward only: light
+    // turned back inside a gem flew straight out of the volume, and never reached the facets
+    // that send part of it down again.
+    var j = slab;
+    for (var hop = 0u; hop < 4u * slabs + 4u; hop += 1u) {
+        let b = slab_bounds(j);
+        q = clamp(q, b[0], b[1]);
+        if march_slab(&p, &q, &dq, &rng, j, b[0], b[1], eps) {
+            finals[i] = p;
+            return;
+        }
+        // Fly to the slab's boundary.
+        let exit = box_exit(q, dq, b[0], b[1]);
+        q += dq * exit.x;
+        advance(&p, exit.x);
+        p.pos = vec4(vol_world(q), p.pos.w);
+        p.dir = vec4(vol_world_dir(dq), p.dir.w);
+        let code = u32(exit.y);
+        if code / 2u != e {
+            leave(&p, code, i);
+            return;
+        }
+        if -s * dq[e] > 0.0 {
+            // Deeper (towards the face opposite the entry).
+            if j < slab {
+                j += 1u;
+                continue;
+            }
             if slab + 1u < slabs {
                 states[(slab + 1u) * cap + i] = p;
                 let at = atomicAdd(&counts[slab + 1u], 1u);
@@ -379,20 +482,17 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
             leave(&p, entry_code ^ 1u, i);
             return;
         }
-        if slab == 0u {
+        if j == 0u {
             leave(&p, entry_code, i);
             return;
         }
-        // Backwards across an inner boundary: straight to the volume's boundary (section
-        // 3.3 only carries photons forward).
+        // Back towards the entry across an inner boundary: on in the slab before.
         count(C_BACKWARD);
-        let whole = box_exit(qe, dq, -h, h);
-        advance(&p, whole.x);
-        p.pos = vec4(vol_world(qe + dq * whole.x), p.pos.w);
-        leave(&p, u32(whole.y), i);
-        return;
+        j -= 1u;
     }
-    leave(&p, code, i);
+    count(C_STEP_LIMIT);
+    set_end(&p, END_GONE);
+    finals[i] = p;
 }
 
 @compute @workgroup_size(1)
