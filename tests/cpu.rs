@@ -840,16 +840,29 @@ fn volumes_at_the_limits_validate() {
         ..Default::default()
     };
     assert_eq!(sanitize_volume(&mut zero, &Default::default()).len(), 1);
+    // 64 slabs with photons that fit (WebGPU's default device: 2^21 / 64 = 32 768 per slab
+    // level)...
     let mut many = CausticsVolume {
         slabs: 64,
+        photons: 20_000,
         ..Default::default()
     };
     assert!(
         sanitize_volume(&mut many, &Default::default()).is_empty(),
         "64 slabs is valid"
     );
+    // ...and with the default 80 000, which do not at 64 slabs: the photons are clamped.
+    let mut crowded = CausticsVolume {
+        slabs: 64,
+        ..Default::default()
+    };
+    let fixes = sanitize_volume(&mut crowded, &Default::default());
+    assert_eq!(fixes.len(), 1, "{fixes:?}");
+    assert_eq!(fixes[0].0, "photons");
+    assert_eq!(crowded.photons, 32_768);
     let mut too_many = CausticsVolume {
         slabs: 65,
+        photons: 20_000,
         ..Default::default()
     };
     assert_eq!(sanitize_volume(&mut too_many, &Default::default()).len(), 1);
