@@ -262,9 +262,8 @@ fn march_slab(p_out: ptr<function, VolPhoton>, q_io: ptr<function, vec3<f32>>, d
     // photon totally reflected once inside a gem flew on through its far side and lit the
     // floor where the gem sends light back up (+8 % of the caustic on an open brilliant).
     var phase = 0u;
-    var exit = vec2(0.0);
     for (var segment = 0u; segment < VOL_SEGMENTS; segment += 1u) {
-        exit = box_exit(q, dq, lo, hi);
+        let exit = box_exit(q, dq, lo, hi);
         let t_end = exit.x;
         let inside = (flags_of(p) & F_MEDIUM) != 0u;
         if (phase >= 2u && !inside) || t_end <= 0.0 {
