@@ -43,23 +43,28 @@ fn room_scene(
 /// whose cone just holds the gem: most light entering the crown is totally reflected by the
 /// pavilion, many paths take dozens of internal reflections.
 pub fn gem_room() -> SceneDesc {
-    let at = CASTER_AT + Vec3::new(0.3, 1.4, 0.2);
     room_scene(
         "gem_room",
         geometry::brilliant(0.5),
         2.4,
-        LightDesc {
-            name: "spot".into(),
-            kind: LightKind::Spot {
-                candela: 20_000.0,
-                inner: 0.25,
-                outer: 0.4,
-            },
-            color: Vec3::ONE,
-            translation: at,
-            rotation: shine_along((CASTER_AT - at).normalize()),
-        },
+        gem_spot(CASTER_AT),
     )
+}
+
+/// The spot above a gem centred at `gem`, its cone just holding the gem.
+fn gem_spot(gem: Vec3) -> LightDesc {
+    let at = gem + Vec3::new(0.3, 1.4, 0.2);
+    LightDesc {
+        name: "spot".into(),
+        kind: LightKind::Spot {
+            candela: 20_000.0,
+            inner: 0.25,
+            outer: 0.4,
+        },
+        color: Vec3::ONE,
+        translation: at,
+        rotation: shine_along((gem - at).normalize()),
+    }
 }
 
 /// The brilliant of [`gem_room`] 0.8 m above an open floor under the same spot, seen from
@@ -79,18 +84,7 @@ pub fn gem_floor() -> SceneDesc {
     s.add("floor", geometry::quad(20.0, 20.0), grey, Vec3::ZERO);
     let at = Vec3::new(0.0, 0.8, 0.0);
     s.add("gem", geometry::brilliant(0.5), g, at);
-    let light = at + Vec3::new(0.3, 1.4, 0.2);
-    s.lights.push(LightDesc {
-        name: "spot".into(),
-        kind: LightKind::Spot {
-            candela: 20_000.0,
-            inner: 0.25,
-            outer: 0.4,
-        },
-        color: Vec3::ONE,
-        translation: light,
-        rotation: shine_along((at - light).normalize()),
-    });
+    s.lights.push(gem_spot(at));
     s
 }
 
