@@ -21,6 +21,8 @@
 
 pub mod components;
 pub mod headless;
+#[cfg(feature = "inspector")]
+pub mod inspector;
 pub mod limits;
 pub mod optics;
 pub mod reference;
@@ -40,6 +42,8 @@ pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
     CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace,
 };
+#[cfg(feature = "inspector")]
+pub use inspector::CausticsInspectorPlugin;
 pub use limits::CausticsLimits;
 pub use render::CausticsDispatchLog;
 

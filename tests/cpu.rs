@@ -890,6 +890,8 @@ mod aaps;
 
 #[path = "cpu/energy.rs"]
 mod energy;
+#[path = "cpu/inspector.rs"]
+mod inspector;
 #[path = "cpu/limits.rs"]
 mod limits;
 #[path = "cpu/reference_cache.rs"]

@@ -14,17 +14,21 @@ pub struct AapsSettings {
     /// original authors'; the thesis used 256). Power of two in [8, 1024]; other values are
     /// rounded to the nearest power of two. Cost: the task-buffer update scales with its
     /// square, and the minimum photon count is `4 · side²` per light.
+    #[reflect(@8_u32..=1024_u32)]
     pub atlas_resolution: u32,
     /// Screen-space splat area the density update aims for, pixels. Default 19 (the thesis's
     /// best RMSE on its Pool scene, section 4.3). Smaller: more photons, sharper, slower.
+    #[reflect(@0.01_f32..=1.0e4_f32)]
     pub target_area: f32,
     /// Variance gain `g` of `D' = D A / A_t + v g`: photons added per unit of relative
     /// temporal variance. Default 4 (ours). 0 switches the variance term off.
     pub variance_gain: f32,
     /// Temporal weight `w_t` of the density blend (section 3.1.5): 1 keeps only the new
     /// suggestion, 0 only the neighbours' previous values. Default 0.5 (ours).
+    #[reflect(@0.0_f32..=1.0_f32)]
     pub temporal_weight: f32,
     /// Minimum ray density per texel. Default 4 (section 3.2.2). At least 1.
+    #[reflect(@1.0_f32..=1.0e6_f32)]
     pub min_density: f32,
     /// Maximum ray density per texel; 0 means none. Default 0 (the thesis's experiments).
     pub max_density: f32,
@@ -48,32 +52,38 @@ pub struct AapsSettings {
     /// spacing of the photon's texel). The thesis leaves it open. Default 1.5 (ours: on the test scenes
     /// at 128², 1.0 leaves sub-pixel gaps, RMSE 321 on `glass_sphere`; 1.5 gives 164, 2.5 gives
     /// 102 but blurs, FLIP 0.029 → 0.032 and 0.049 → 0.089 on `ring`). Range [0.1, 16].
+    #[reflect(@0.1_f32..=16.0_f32)]
     pub splat_scale: f32,
     /// Largest ratio of a splat's axes (section 3.1.2: "anisotropy is limited"). Default 16
     /// (ours). At least 1.
+    #[reflect(@1.0_f32..=1.0e4_f32)]
     pub max_anisotropy: f32,
     /// Specular interactions followed per photon before it is dropped (its flux is counted as
     /// in flight at the cap). Default 64 (ours: a brilliant-cut IOR 2.4 gem in a closed room of
     /// receivers keeps all but 0.7 % of the power that strikes it; the reference tracer loses
     /// 5.9 % at 16). Range [1, 128]. Cost: only the paths that bounce that often pay for it.
+    #[reflect(@1_u32..=128_u32)]
     pub max_bounces: u32,
     /// Capacity of the splat buffer, splats (64 bytes each). Default 2 097 148: 2^21 less the
     /// 4-splat guard region, so the buffer fits a 128 MiB storage binding (WebGPU's default).
     /// At most what one storage binding of the GPU holds
     /// ([`crate::limits::CausticsLimits::max_splat_capacity`]), clamped with a warning.
     /// Splats past it are counted as overflow and not drawn.
+    #[reflect(@1_u32..=16_777_216_u32)]
     pub splat_capacity: u32,
     /// Share of the frame's photon budget spread evenly over the texels whose photons reached
     /// a visible receiver last frame (ours, [`crate::optics::budget_split`]); the rest follows
     /// the thesis's `D' = D A / A_t`. A focus has sub-pixel splats, so `D'` alone leaves it at
     /// the minimum density at every budget and its error stops falling; the floor grows with
     /// the budget. Default 0.5. Range [0, 1]; 0 is the thesis's rule.
+    #[reflect(@0.0_f32..=1.0_f32)]
     pub budget_floor_share: f32,
     /// Point splats (ours): a splat whose projected area is under this many pixels is drawn
     /// into the one pixel holding its centre with its whole flux (`E · area_px`), as the
     /// reference bins photons. Drawn as a tiny ellipse it would cover 0 or 1 of 4 MSAA
     /// samples by chance, and that quantisation, not the photon count, set the error at a
     /// focus. Default 1 px. 0 switches it off. Cost: none (one-pixel quads).
+    #[reflect(@0.0_f32..=16.0_f32)]
     pub point_splat_area: f32,
     /// Adapt the density every frame. Default true. `false` freezes it at the uniform
     /// density the budget allows (for comparisons).

@@ -10,6 +10,7 @@ pub struct CausticLight {
     /// Multiplier on the caustic light of this light source only. Default 1 (physically
     /// calibrated). Range [0, 1000]; negative or non-finite values are clamped to 0 with a
     /// warning. No cost.
+    #[reflect(@0.0_f32..=1000.0_f32)]
     pub intensity_scale: f32,
 }
 

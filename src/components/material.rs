@@ -11,6 +11,7 @@ pub enum CausticMaterial {
     Dielectric {
         /// Index of refraction. Range [1, 4] (1 gives no caustic); values below 1 or
         /// non-finite are clamped to 1 with a warning, above 4 to 4.
+        #[reflect(@1.0_f32..=4.0_f32)]
         ior: f32,
         /// Colour left after `attenuation_distance` metres inside. Default white.
         attenuation_color: Color,

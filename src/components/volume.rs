@@ -17,6 +17,7 @@ pub struct CausticsVolume {
     pub size: Vec3,
     /// Slabs parallel to the entry face. Default 3. Range [1, 64]; 0 is clamped to 1 and
     /// values above 64 to 64, with a warning. Cost: one propagation pass per slab.
+    #[reflect(@1_u32..=64_u32)]
     pub slabs: u32,
     /// Photon budget per update. Default 80 000 (the sweep behind the defaults, in CHANGELOG.md:
     /// FLIP against the reference at 128², glass_slab / glass_sphere, 0.029 / 0.078 with the
@@ -27,6 +28,7 @@ pub struct CausticsVolume {
     /// 4 194 240 are traced (one dispatch), fewer where the GPU's storage bindings are smaller
     /// (64 bytes per photon per slab); the entry face is divided among the photons traced, so
     /// the energy is the same.
+    #[reflect(@0_i32..=16777216_i32)]
     pub photons: i32,
     /// Face photons enter through. Default `PosY` (the top).
     pub entry: VolumeFace,
@@ -36,21 +38,26 @@ pub struct CausticsVolume {
     pub culling: Vec<VolumeFace>,
     /// Side of each projector's square G-buffer, pixels. Default 400. Range [16, 4096],
     /// clamped with a warning. Cost: quadratic.
+    #[reflect(@16_u32..=4096_u32)]
     pub projector_resolution: u32,
     /// Side of each slab's square G_near / G_far, pixels (`G_dims`). Default 200 (400 is
     /// sharper, FLIP 0.016 / 0.060 on glass_slab / glass_sphere, but loses energy: -2.4 % on the
     /// slab, -8.6 % on an open brilliant against -1.7 % at 200; not yet understood). Range
     /// [16, 4096], clamped with a warning. Cost: two rasterisations per slab, quadratic.
+    #[reflect(@16_u32..=4096_u32)]
     pub gbuffer_resolution: u32,
     /// Side of a density tile, in projector texels (section 3.4's grid). Default 4. Range
     /// [1, 64], clamped with a warning. Larger: smoother, blurrier caustics.
+    #[reflect(@1_u32..=64_u32)]
     pub tile_size: u32,
     /// Photons a splat overlaps (`π r² = overlap · tile area / photons in the tile`). Default
     /// 4. Range [0.25, 64], clamped with a warning. Energy does not depend on it.
+    #[reflect(@0.25_f32..=64.0_f32)]
     pub splat_overlap: f32,
     /// Radius of the depth- and normal-aware Gaussian applied to the volumes' contribution,
     /// camera pixels (sigma half of it). Default 1 (2 blurs a slab's sharp caustic edge: FLIP
     /// 0.016 -> 0.026 on glass_slab at 400² G-buffers); 0 turns the blur off. Range [0, 8], clamped with a warning.
+    #[reflect(@0_u32..=8_u32)]
     pub blur_radius: u32,
     /// Slab level of detail (section 3.5): beyond this distance from the nearest camera, in
     /// volume diagonals, the slab count halves for every doubling of the distance. Default 8;
@@ -219,6 +226,7 @@ pub struct CausticsVolumeGizmos {
     /// Face outlines are inset towards the face centre by this fraction of the face's
     /// extents, so neighbouring faces stay apart. Default 0.02. Range [0, 0.45] (clamped
     /// where used).
+    #[reflect(@0.0_f32..=0.45_f32)]
     pub inset: f32,
 }
 

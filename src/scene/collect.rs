@@ -97,6 +97,31 @@ pub fn material_params(m: &StandardMaterial) -> MaterialParams {
     }
 }
 
+/// The [`CausticMaterial`] the plugin derives from a `StandardMaterial` when the mesh has none
+/// (the inspector shows it, and can insert it as an override to edit).
+pub fn derived_caustic_material(m: &StandardMaterial) -> CausticMaterial {
+    let color = |v: GVec3| Color::linear_rgb(v.x, v.y, v.z);
+    match classify_material(&material_params(m)) {
+        Surface::Dielectric {
+            ior,
+            attenuation_color,
+            attenuation_distance,
+            thin,
+        } => CausticMaterial::Dielectric {
+            ior,
+            attenuation_color: color(attenuation_color),
+            attenuation_distance,
+            thin,
+        },
+        Surface::Conductor { f0 } => CausticMaterial::Mirror {
+            reflectance: color(f0),
+        },
+        Surface::Diffuse { albedo } => CausticMaterial::Receiver {
+            albedo: color(albedo),
+        },
+    }
+}
+
 fn override_surface(m: &CausticMaterial) -> Surface {
     let rgb = |c: &Color| {
         let l = c.to_linear();
