@@ -23,6 +23,8 @@ use bevy::render::texture::GpuImage;
 use bevy::render::{RenderApp, RenderStartup};
 
 use crate::render::aaps::view::AapsViewState;
+use crate::render::volume::gpu::tile_stride;
+use crate::render::volume::view::VolumeStore;
 use crate::render::{ExtractedCaustics, ViewCausticsBuffer};
 
 /// GPU time span of the colour-mapping pass.
@@ -42,11 +44,23 @@ pub enum LiveKind {
     Area,
     /// AAPS: the per-texel variance estimate.
     Variance,
+    /// Volume: one slab G-buffer layer (G_near of slab k is layer 2k, G_far 2k + 1), its
+    /// normals as colours, black where empty.
+    SlabGBuffer,
+    /// Volume: photons per density tile of one exit face's projector.
+    ProjectorTiles,
 }
 
 impl LiveKind {
     /// All kinds, in the panel's order.
-    pub const ALL: [LiveKind; 4] = [Self::Caustics, Self::Density, Self::Area, Self::Variance];
+    pub const ALL: [LiveKind; 6] = [
+        Self::Caustics,
+        Self::Density,
+        Self::Area,
+        Self::Variance,
+        Self::SlabGBuffer,
+        Self::ProjectorTiles,
+    ];
 
     /// Label.
     pub fn label(self) -> &'static str {
@@ -55,6 +69,8 @@ impl LiveKind {
             Self::Density => "AAPS density (photons / texel)",
             Self::Area => "AAPS projected area (px / splat)",
             Self::Variance => "AAPS variance",
+            Self::SlabGBuffer => "volume slab G-buffer (normals)",
+            Self::ProjectorTiles => "volume projector density tiles",
         }
     }
 
@@ -64,7 +80,8 @@ impl LiveKind {
             Self::Caustics => "lx",
             Self::Density => "photons",
             Self::Area => "px",
-            Self::Variance => "",
+            Self::Variance | Self::SlabGBuffer => "",
+            Self::ProjectorTiles => "photons",
         }
     }
 
@@ -75,6 +92,8 @@ impl LiveKind {
             Self::Density => (0.1, 1.0e3),
             Self::Area => (0.01, 100.0),
             Self::Variance => (1.0e-4, 10.0),
+            Self::SlabGBuffer => (1.0, 2.0),
+            Self::ProjectorTiles => (0.5, 1.0e3),
         }
     }
 
@@ -103,6 +122,12 @@ pub struct InspectorImages {
     pub camera: Option<Entity>,
     /// The images.
     pub images: Vec<LiveImage>,
+    /// The volume whose buffers are shown (main-world entity; None: the first).
+    pub volume: Option<Entity>,
+    /// The slab G-buffer layer shown (G_near of slab k is 2k, G_far 2k + 1).
+    pub slab_layer: u32,
+    /// The exit face whose projector tiles are shown (`volume::frame::face_code`).
+    pub face: u32,
 }
 
 impl ExtractResource for InspectorImages {
@@ -146,8 +171,9 @@ fn create_images(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
         })
         .collect();
     commands.insert_resource(InspectorImages {
-        camera: None,
         images: live,
+        face: 3,
+        ..default()
     });
 }
 
@@ -205,6 +231,7 @@ fn colour_map_pass(
         &ExtractedCaustics,
         Option<&AapsViewState>,
     )>,
+    volumes: Option<Res<VolumeStore>>,
     images: Option<Res<InspectorImages>>,
     pipeline: Option<Res<InspectPipeline>>,
     cache: Res<PipelineCache>,
@@ -222,20 +249,51 @@ fn colour_map_pass(
         return;
     };
     let layout = cache.get_bind_group_layout(&pipeline.layout);
+    let volume = volumes.as_deref().and_then(|store| {
+        store
+            .volumes
+            .iter()
+            .find(|v| Some(v.entity) == images.volume)
+            .or(store.volumes.first())
+    });
     let mut work = Vec::new();
     for live in images.images.iter().filter(|i| i.shown) {
-        let atlas = aaps.map(|a| (&a.density[0], &a.accum, a.key.atlas[0]));
-        if live.kind != LiveKind::Caustics && atlas.is_none() {
-            continue;
-        }
         let Some(target) = gpu_images.get(live.image.id()) else {
             continue;
         };
-        let (density, accum, side) = atlas.unwrap_or((&pipeline.empty, &pipeline.empty, 0));
+        // Per kind: the texture and the two buffers bound, the grid side, the source size and
+        // the first word of the tile set.
+        let empty = &pipeline.empty;
+        let (texture, density, accum, side, size, offset) = match live.kind {
+            LiveKind::Caustics => (&buffer.view, empty, empty, 0, buffer.size, 0),
+            LiveKind::Density | LiveKind::Area | LiveKind::Variance => {
+                let Some(a) = aaps else { continue };
+                let side = a.key.atlas[0];
+                (&buffer.view, &a.density[0], &a.accum, side, buffer.size, 0)
+            }
+            LiveKind::SlabGBuffer => {
+                let Some(v) = volume else { continue };
+                let Some(layer) = v
+                    .slab_layers
+                    .get(images.slab_layer as usize)
+                    .or(v.slab_layers.last())
+                else {
+                    continue;
+                };
+                (layer, empty, empty, 0, UVec2::splat(v.key.gbuffer), 0)
+            }
+            LiveKind::ProjectorTiles => {
+                let Some(v) = volume else { continue };
+                let side = v.key.projector.div_ceil(v.key.tile.max(1));
+                let offset = images.face.min(5) as u64 * tile_stride(&v.key);
+                (&buffer.view, &v.tiles, empty, side, buffer.size, offset)
+            }
+        };
         let mut params = [0u8; 32];
         params[0..4].copy_from_slice(&live.range.0.max(1e-30).to_le_bytes());
         params[4..8].copy_from_slice(&live.range.1.max(live.range.0 * 1.001).to_le_bytes());
-        for (i, w) in [live.kind.code(), side, buffer.size.x, buffer.size.y]
+        params[8..12].copy_from_slice(&(offset as f32).to_le_bytes());
+        for (i, w) in [live.kind.code(), side, size.x, size.y]
             .into_iter()
             .enumerate()
         {
@@ -252,7 +310,7 @@ fn colour_map_pass(
             "caustics:bind_group:inspector",
             &layout,
             &BindGroupEntries::sequential((
-                &buffer.view,
+                texture,
                 density.as_entire_binding(),
                 accum.as_entire_binding(),
                 uniform.as_entire_binding(),

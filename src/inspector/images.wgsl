@@ -3,14 +3,18 @@
 // image that egui samples. Runs only while the panel shows the image.
 
 struct InspectParams {
-    // lo, hi: the legend's range (lux, or the field's units); both > 0.
+    // x, y: the legend's range, low and high (lux, or the field's units), both > 0; z: the
+    // first word of the tile set (projector tiles).
     range: vec4<f32>,
-    // x: what (0 caustics buffer, 1 density, 2 projected area, 3 variance); y: atlas side;
-    // z, w: source width, height.
+    // x: what (0 caustics buffer, 1 density, 2 projected area, 3 variance, 4 slab G-buffer
+    // layer, 5 projector density tiles); y: atlas or tile-grid side; z, w: source texture
+    // width, height.
     what: vec4<u32>,
 }
 
+// The caustics buffer, or a volume's slab G-buffer layer.
 @group(0) @binding(0) var caustics: texture_2d<f32>;
+// The AAPS density atlas, or a volume's density tiles (u32 counts).
 @group(0) @binding(1) var<storage, read> density: array<f32>;
 @group(0) @binding(2) var<storage, read> accum: array<u32>;
 @group(0) @binding(3) var<uniform> params: InspectParams;
@@ -52,10 +56,24 @@ fn colour_map(@builtin(global_invocation_id) id: vec3<u32>) {
     let uv = (vec2<f32>(id.xy) + 0.5) / vec2<f32>(size);
     var v = 0.0;
     var zero = false;
+    if params.what.x == 4u {
+        // G-buffer texel: (depth, n.x, n.y, ±(instance + 1)), the sign that of n.z; 0: empty.
+        let src = vec2<u32>(uv * vec2<f32>(params.what.zw));
+        let g = textureLoad(caustics, min(src, params.what.zw - 1u), 0);
+        let nz = sign(g.w) * sqrt(max(1.0 - g.y * g.y - g.z * g.z, 0.0));
+        let c = select(vec3(g.y, g.z, nz) * 0.5 + 0.5, vec3(0.0), g.w == 0.0);
+        textureStore(out, id.xy, vec4(c, 1.0));
+        return;
+    }
     if params.what.x == 0u {
         let src = vec2<u32>(uv * vec2<f32>(params.what.zw));
         let e = textureLoad(caustics, min(src, params.what.zw - 1u), 0).rgb;
         v = dot(e, vec3(0.2126, 0.7152, 0.0722));
+        zero = !(v > 0.0);
+    } else if params.what.x == 5u {
+        let a = max(params.what.y, 1u);
+        let t = min(vec2<u32>(uv * f32(a)), vec2(a - 1u));
+        v = f32(bitcast<u32>(density[u32(params.range.z) + t.y * a + t.x]));
         zero = !(v > 0.0);
     } else {
         let a = max(params.what.y, 1u);

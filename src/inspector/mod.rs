@@ -218,6 +218,18 @@ fn inspector_window(world: &mut World) {
     let registry = registry.read();
     let mut live = world.resource::<InspectorImages>().clone();
     live.camera = camera;
+    live.volume = state
+        .selected
+        .filter(|e| world.get::<CausticsVolume>(*e).is_some())
+        .or_else(|| {
+            rows.iter()
+                .find(|r| r.kind == EntityKind::Volume)
+                .map(|r| r.entity)
+        });
+    let slabs = live
+        .volume
+        .and_then(|e| world.get::<CausticsVolume>(e))
+        .map_or(1, |v| v.slabs.clamp(1, 64));
     let textures: Vec<Option<egui::TextureId>> = {
         let mut user = world.resource_mut::<EguiUserTextures>();
         live.images
@@ -260,9 +272,10 @@ fn inspector_window(world: &mut World) {
     egui::Window::new("Caustics images")
         .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
         .default_width(300.0)
+        .max_height(height)
         .vscroll(true)
         .show(&ctx, |ui| {
-            live_images(ui, &mut live, &textures, &sizes);
+            live_images(ui, &mut live, slabs, &textures, &sizes);
         });
     *world.resource_mut::<CausticsInspector>() = state;
     *world.resource_mut::<InspectorImages>() = live;
@@ -401,17 +414,41 @@ fn sparkline(ui: &mut egui::Ui, values: &[f64]) {
 fn live_images(
     ui: &mut egui::Ui,
     live: &mut InspectorImages,
+    slabs: u32,
     textures: &[Option<egui::TextureId>],
     sizes: &[UVec2],
 ) {
+    const FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
     for (i, image) in live.images.iter_mut().enumerate() {
-        ui.checkbox(&mut image.shown, image.kind.label());
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut image.shown, image.kind.label());
+            match image.kind {
+                LiveKind::SlabGBuffer if image.shown => {
+                    let mut k = live.slab_layer.min(2 * slabs - 1);
+                    ui.add(egui::DragValue::new(&mut k).range(0..=2 * slabs - 1))
+                        .on_hover_text("layer: G_near of slab k is 2k, G_far 2k + 1");
+                    live.slab_layer = k;
+                }
+                LiveKind::ProjectorTiles if image.shown => {
+                    egui::ComboBox::from_id_salt("caustics_tiles_face")
+                        .selected_text(FACES[live.face.min(5) as usize])
+                        .show_ui(ui, |ui| {
+                            for (f, name) in FACES.iter().enumerate() {
+                                ui.selectable_value(&mut live.face, f as u32, *name);
+                            }
+                        });
+                }
+                _ => {}
+            }
+        });
         if let (true, Some(Some(id))) = (image.shown, textures.get(i)) {
             let size = sizes.get(i).copied().unwrap_or(UVec2::ONE);
             let w = ui.available_width().min(size.x as f32 * 1.4);
             let h = w * size.y as f32 / size.x as f32;
             ui.image(egui::load::SizedTexture::new(*id, [w, h]));
-            legend(ui, image);
+            if image.kind != LiveKind::SlabGBuffer {
+                legend(ui, image);
+            }
         }
     }
 }
