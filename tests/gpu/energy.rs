@@ -1,7 +1,8 @@
 //! Closed-form energy on the GPU (issue: accuracy where light bounces many times): a gem and
 //! an IOR 4 ball in a closed room of receivers hand every watt that strikes them to the walls,
 //! and an absorbing slab passes the Beer-Lambert closed form, for AAPS (within 3 %) and caustics
-//! volumes (within 10 %). The power striking the caster comes from the CPU reference (the same
+//! volumes (within 10 %), and the slab's caustic keeps the closed form's colour (channel ratios
+//! within 2 %). The power striking the caster comes from the CPU reference (the same
 //! light and mesh), which the CPU tests hold to the closed form within 1 %.
 
 use bevy_caustics::headless::{RenderJob, run};
@@ -48,6 +49,40 @@ fn cases() -> [(SceneDesc, Option<f64>); 3] {
     ]
 }
 
+/// The caustic's colour under the absorbing slab against the closed form (issue 13, coloured
+/// glass): the mean irradiance per channel over the pixels lit at least half as brightly as the
+/// closed form's green, as ratios red/green and blue/green. Returns the largest relative error
+/// of the two ratios, after printing both.
+fn slab_colour_error(technique: &str, image: &bevy_caustics::reference::CausticImage) -> f64 {
+    // Irradiance under the slab: the power through its 1 m² face, per m².
+    let expect = closed::absorbing_slab_power().as_dvec3();
+    let lit: Vec<glam::DVec3> = image
+        .data
+        .iter()
+        .map(|v| v.as_dvec3())
+        .filter(|v| v.y > 0.5 * expect.y)
+        .collect();
+    assert!(
+        lit.len() > 20,
+        "{technique}: only {} pixels under the slab are lit",
+        lit.len()
+    );
+    let mean = lit.iter().sum::<glam::DVec3>() / lit.len() as f64;
+    let ratio = |v: glam::DVec3| glam::DVec2::new(v.x / v.y, v.z / v.y);
+    let (got, want) = (ratio(mean), ratio(expect));
+    let err = (got / want - glam::DVec2::ONE).abs().max_element();
+    println!(
+        "absorbing_slab colour, {technique}: mean over {} lit pixels {mean:.0?} lx (closed form {expect:.0?}), R/G {:.4} B/G {:.4} (closed form {:.4} {:.4}), largest ratio error {:.2} %",
+        lit.len(),
+        got.x,
+        got.y,
+        want.x,
+        want.y,
+        err * 100.0
+    );
+    err
+}
+
 fn aaps_run(desc: &SceneDesc) -> bevy_caustics::headless::AapsCounters {
     let report = run(RenderJob {
         scene: write(desc),
@@ -60,7 +95,16 @@ fn aaps_run(desc: &SceneDesc) -> bevy_caustics::headless::AapsCounters {
         ..Default::default()
     })
     .unwrap_or_else(|e| panic!("{}: {e}", desc.name));
-    assert!(report.caustics.as_ref().unwrap().all_finite());
+    let image = report.caustics.as_ref().unwrap();
+    assert!(image.all_finite());
+    if desc.name == "absorbing_slab" {
+        let err = slab_colour_error("aaps", image);
+        assert!(
+            err < 0.02,
+            "AAPS slab colour ratio off by {:.2} %",
+            err * 100.0
+        );
+    }
     report.aaps.expect("AAPS counters")
 }
 
@@ -136,7 +180,16 @@ fn volume_closed_form_energy() {
             v.splatted_lm,
             err * 100.0
         );
-        assert!(report.caustics.unwrap().all_finite());
+        let image = report.caustics.unwrap();
+        assert!(image.all_finite());
+        if desc.name == "absorbing_slab" {
+            let err = slab_colour_error("volume", &image);
+            assert!(
+                err < 0.02,
+                "volume slab colour ratio off by {:.2} %",
+                err * 100.0
+            );
+        }
         assert!(v.splatted_lm <= v.entered_lm * (1.0 + 1e-5));
         assert!(err.abs() < 0.10, "{}: {:+.2} %", desc.name, err * 100.0);
     }
