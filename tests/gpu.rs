@@ -13,6 +13,8 @@ static GPU: Mutex<()> = Mutex::new(());
 mod aaps;
 #[path = "gpu/energy.rs"]
 mod energy;
+#[path = "gpu/examples.rs"]
+mod examples;
 #[path = "gpu/first_use.rs"]
 mod first_use;
 #[path = "gpu/twins.rs"]

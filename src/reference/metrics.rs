@@ -165,3 +165,15 @@ pub fn plane_region_mean(
     }
     ((sum / count.max(1) as f64) as f32, count)
 }
+
+/// Mean FLIP between two 8-bit sRGB images of `w` x `h` pixels (RGB, 3 bytes a pixel), as
+/// the example tests compare a render with its golden image.
+pub fn flip_mean_rgb8(test: &[u8], reference: &[u8], w: u32, h: u32) -> f64 {
+    let r = nv_flip::FlipImageRgb8::with_data(w, h, reference);
+    let t = nv_flip::FlipImageRgb8::with_data(w, h, test);
+    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
+    if err.is_empty() {
+        return 0.0;
+    }
+    err.iter().map(|e| *e as f64).sum::<f64>() / err.len() as f64
+}
