@@ -130,13 +130,25 @@ fn inspector_only_on_request(inspector: Option<ResMut<CausticsInspector>>) {
     }
 }
 
-/// `CAUSTICS_EXAMPLE_DARK=1` scales every caustic light to 0 (the tests show that the golden
-/// comparison sees the caustics).
-fn dark_caustics_on_request(mut lights: Query<&mut bevy_caustics::CausticLight>) {
-    if std::env::var("CAUSTICS_EXAMPLE_DARK").is_ok_and(|v| v == "1") {
+/// `CAUSTICS_EXAMPLE_DARK=1` scales every caustic light to 0; `CAUSTICS_EXAMPLE_HIDDEN=1`
+/// sets every camera's debug view to `Hidden` (the tests show that the golden comparison sees
+/// the caustics, and that both give the frame without them).
+fn dark_caustics_on_request(
+    mut lights: Query<&mut bevy_caustics::CausticLight>,
+    mut cameras: Query<&mut bevy_caustics::Caustics>,
+) {
+    let on = |k: &str| std::env::var(k).is_ok_and(|v| v == "1");
+    if on("CAUSTICS_EXAMPLE_DARK") {
         for mut l in &mut lights {
             if l.intensity_scale != 0.0 {
                 l.intensity_scale = 0.0;
+            }
+        }
+    }
+    if on("CAUSTICS_EXAMPLE_HIDDEN") {
+        for mut c in &mut cameras {
+            if c.debug_view != bevy_caustics::CausticsDebugView::Hidden {
+                c.debug_view = bevy_caustics::CausticsDebugView::Hidden;
             }
         }
     }
@@ -390,7 +402,7 @@ fn help_line(
         .and_then(|d| d.smoothed())
         .map_or("–".to_string(), |f| format!("{f:.0}"));
     egui::Area::new(egui::Id::new("caustics_help"))
-        .anchor(egui::Align2::LEFT_BOTTOM, [8.0, -8.0])
+        .anchor(egui::Align2::CENTER_BOTTOM, [0.0, -8.0])
         .show(contexts.ctx_mut()?, |ui| {
             ui.label(
                 egui::RichText::new(format!(

@@ -119,4 +119,7 @@ pub enum CausticsDebugView {
     /// Adds the caustic irradiance as if every surface were white (albedo 1), to see the
     /// caustics buffer itself.
     WhiteAlbedo,
+    /// The technique runs but nothing is composited: the frame without caustics, to compare
+    /// (the inspector's A/B switch). Costs what `Off` costs, less the composite pass.
+    Hidden,
 }

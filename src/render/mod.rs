@@ -64,6 +64,8 @@ pub struct ExtractedCaustics {
     pub photons_per_light: u64,
     /// Composite as if albedo were 1.
     pub white_albedo: bool,
+    /// Run the technique but composite nothing ([`CausticsDebugView::Hidden`]).
+    pub hidden: bool,
     /// The reference image to upload, with its serial.
     pub reference: Option<(Arc<CausticImage>, u64)>,
 }
@@ -99,6 +101,7 @@ impl ExtractComponent for Caustics {
             aaps: aaps.cloned().unwrap_or_default(),
             photons_per_light: c.quality.photons_per_light(),
             white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
+            hidden: c.debug_view == CausticsDebugView::Hidden,
             reference,
         })
     }

@@ -159,6 +159,13 @@ fn examples_match_their_goldens() {
                 fd > 1.5 * GOLDEN_FLIP,
                 "the golden test cannot see a missing caustic ({fd:.4})"
             );
+            // The `Hidden` debug view: the technique runs, nothing is composited; the frame is
+            // the one without caustics.
+            let hidden = run_example(name, &out, SIZE, &[("CAUSTICS_EXAMPLE_HIDDEN", "1")]);
+            let fh = flip(&hidden.png, &dark.png);
+            println!("minimal, debug view Hidden: mean FLIP against the dark render {fh:.4}");
+            assert!(check_caustics(name, &hidden.stdout) > 100.0);
+            assert!(fh < 0.001, "Hidden still composites ({fh:.4})");
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

@@ -149,7 +149,7 @@ pub fn composite_caustics(
         // Volumes fill it this frame, or none is visible.
         CausticsTechnique::Volume => volume.is_some(),
     };
-    if !filled {
+    if !filled || caustics.hidden {
         return;
     }
     let mut params = [0u8; 16];
