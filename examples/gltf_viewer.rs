@@ -13,6 +13,7 @@ use bevy::camera::Exposure;
 use bevy::camera::primitives::Aabb;
 use bevy::prelude::*;
 use bevy_caustics::CausticsInspectorPlugin;
+use bevy_caustics::mark_every_light;
 use bevy_caustics::prelude::*;
 use common::{Controls, DefaultPlugins, OrbitCamera};
 
@@ -45,7 +46,7 @@ fn main() -> AppExit {
         .add_plugins(Controls::new("the scene's lights cast caustics"))
         .insert_resource(ScenePath(path))
         .add_systems(Startup, load)
-        .add_systems(Update, (caustic_lights, caustics_camera))
+        .add_systems(Update, (mark_every_light, caustics_camera))
         .run()
 }
 
@@ -56,37 +57,6 @@ fn load(mut commands: Commands, path: Res<ScenePath>, assets: Res<AssetServer>) 
     let name = path.0.file_name().map(|n| n.to_string_lossy().into_owned());
     let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(name.unwrap_or_default()));
     commands.spawn(WorldAssetRoot(scene));
-}
-
-/// Every light of the scene casts caustics, with shadow maps.
-#[allow(clippy::type_complexity)]
-fn caustic_lights(
-    mut commands: Commands,
-    mut lights: Query<
-        (
-            Entity,
-            Option<&mut DirectionalLight>,
-            Option<&mut PointLight>,
-            Option<&mut SpotLight>,
-        ),
-        (
-            Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>,
-            Without<CausticLight>,
-        ),
-    >,
-) {
-    for (e, d, p, s) in &mut lights {
-        if let Some(mut d) = d {
-            d.shadow_maps_enabled = true;
-        }
-        if let Some(mut p) = p {
-            p.shadow_maps_enabled = true;
-        }
-        if let Some(mut s) = s {
-            s.shadow_maps_enabled = true;
-        }
-        commands.entity(e).insert(CausticLight::default());
-    }
 }
 
 /// The glTF's camera gets caustics and the orbit controls; without one, a camera is added

@@ -40,7 +40,7 @@ use bevy::render::renderer::{RenderAdapter, RenderDevice};
 pub use components::validate::CausticsWarnings;
 pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
-    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace,
+    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace, mark_every_light,
 };
 #[cfg(feature = "inspector")]
 pub use inspector::CausticsInspectorPlugin;

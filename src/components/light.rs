@@ -1,3 +1,4 @@
+use bevy::light::{DirectionalLight, PointLight, SpotLight};
 use bevy::prelude::*;
 
 /// Marks a `DirectionalLight`, `PointLight` or `SpotLight` as a source of caustics.
@@ -19,5 +20,40 @@ impl Default for CausticLight {
         Self {
             intensity_scale: 1.0,
         }
+    }
+}
+
+/// A system that makes every directional, point and spot light without a [`CausticLight`] a
+/// caustic light, with shadow maps on: the shadow of a caster removes the light it redirects
+/// from direct lighting, and the caustic adds it back where it lands, so the frame does not
+/// count that light twice. For scenes loaded whole (a glTF viewer, the headless renderer):
+/// `app.add_systems(Update, mark_every_light)`.
+#[allow(clippy::type_complexity)]
+pub fn mark_every_light(
+    mut commands: Commands,
+    mut lights: Query<
+        (
+            Entity,
+            Option<&mut DirectionalLight>,
+            Option<&mut PointLight>,
+            Option<&mut SpotLight>,
+        ),
+        (
+            Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>,
+            Without<CausticLight>,
+        ),
+    >,
+) {
+    for (e, d, p, s) in &mut lights {
+        if let Some(mut d) = d {
+            d.shadow_maps_enabled = true;
+        }
+        if let Some(mut p) = p {
+            p.shadow_maps_enabled = true;
+        }
+        if let Some(mut s) = s {
+            s.shadow_maps_enabled = true;
+        }
+        commands.entity(e).insert(CausticLight::default());
     }
 }

@@ -27,9 +27,7 @@ use crate::reference::{
     CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceProgress, ReferenceStatus,
 };
 use crate::render::composite::COMPOSITE_PASS;
-use crate::{
-    CausticLight, Caustics, CausticsDispatchLog, CausticsPlugin, CausticsQuality, CausticsTechnique,
-};
+use crate::{Caustics, CausticsDispatchLog, CausticsPlugin, CausticsQuality, CausticsTechnique};
 
 /// One render.
 #[derive(Clone, Debug)]
@@ -361,7 +359,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         .init_resource::<super::volume::VolumesFitted>()
         .add_systems(Update, (drive, super::volume::fit_volumes).chain());
     if job.mark_lights {
-        app.add_systems(Update, mark_lights);
+        app.add_systems(Update, crate::mark_every_light);
     }
     if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
         let s = shared.clone();
@@ -450,39 +448,6 @@ fn format_bytes(f: TextureFormat) -> usize {
         8
     } else {
         4
-    }
-}
-
-/// Every light of the loaded scene casts caustics, with shadow maps: the shadow of a caster
-/// removes the light it redirects from direct lighting, and the caustic adds it back where it
-/// lands, so the frame does not count that light twice.
-#[allow(clippy::type_complexity)]
-fn mark_lights(
-    mut commands: Commands,
-    mut lights: Query<
-        (
-            Entity,
-            Option<&mut DirectionalLight>,
-            Option<&mut PointLight>,
-            Option<&mut SpotLight>,
-        ),
-        (
-            Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>,
-            Without<CausticLight>,
-        ),
-    >,
-) {
-    for (e, d, p, s) in &mut lights {
-        if let Some(mut d) = d {
-            d.shadow_maps_enabled = true;
-        }
-        if let Some(mut p) = p {
-            p.shadow_maps_enabled = true;
-        }
-        if let Some(mut s) = s {
-            s.shadow_maps_enabled = true;
-        }
-        commands.entity(e).insert(CausticLight::default());
     }
 }
 

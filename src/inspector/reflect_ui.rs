@@ -53,32 +53,40 @@ pub fn edit(
     registry: &TypeRegistry,
 ) -> bool {
     if let Some(v) = value.try_downcast_mut::<f32>() {
-        let speed = drag_speed(*v);
-        let mut d = egui::DragValue::new(v).speed(speed);
-        if let Range::F32(r) = range {
-            d = d.range(r.clone()).clamp_existing_to_range(false);
-        }
-        return ui.add(d).changed();
+        return drag(
+            ui,
+            v,
+            if let Range::F32(r) = range {
+                Some(r)
+            } else {
+                None
+            },
+        );
     }
     if let Some(v) = value.try_downcast_mut::<u32>() {
-        let speed = drag_speed(*v as f32);
-        let mut d = egui::DragValue::new(v).speed(speed);
-        if let Range::U32(r) = range {
-            d = d.range(r.clone()).clamp_existing_to_range(false);
-        }
-        return ui.add(d).changed();
+        return drag(
+            ui,
+            v,
+            if let Range::U32(r) = range {
+                Some(r)
+            } else {
+                None
+            },
+        );
     }
     if let Some(v) = value.try_downcast_mut::<i32>() {
-        let speed = drag_speed(*v as f32);
-        let mut d = egui::DragValue::new(v).speed(speed);
-        if let Range::I32(r) = range {
-            d = d.range(r.clone()).clamp_existing_to_range(false);
-        }
-        return ui.add(d).changed();
+        return drag(
+            ui,
+            v,
+            if let Range::I32(r) = range {
+                Some(r)
+            } else {
+                None
+            },
+        );
     }
     if let Some(v) = value.try_downcast_mut::<u64>() {
-        let speed = drag_speed(*v as f32);
-        return ui.add(egui::DragValue::new(v).speed(speed)).changed();
+        return drag(ui, v, None);
     }
     if let Some(v) = value.try_downcast_mut::<bool>() {
         return ui.checkbox(v, "").changed();
@@ -202,8 +210,19 @@ pub fn default_variant(v: &VariantInfo, registry: &TypeRegistry) -> Option<Dynam
     }
 }
 
-fn drag_speed(v: f32) -> f32 {
-    (v.abs() * 0.01).clamp(0.001, 1000.0)
+/// A drag value, bounded by `range` if given; a value already outside it is shown as it is
+/// (the validator clamps it, with a warning).
+fn drag<T: egui::emath::Numeric>(
+    ui: &mut egui::Ui,
+    v: &mut T,
+    range: Option<&RangeInclusive<T>>,
+) -> bool {
+    let speed = (v.to_f64().abs() * 0.01).clamp(0.001, 1000.0);
+    let mut d = egui::DragValue::new(v).speed(speed);
+    if let Some(r) = range {
+        d = d.range(r.clone()).clamp_existing_to_range(false);
+    }
+    ui.add(d).changed()
 }
 
 fn range_text(r: &Range) -> String {
