@@ -27,7 +27,8 @@ pub use model::{EntityKind, PassTiming, Stats};
 
 use crate::scene::collect::derived_caustic_material;
 use crate::{
-    AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsVolume, CausticsVolumeGizmos,
+    AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsVolume,
+    CausticsVolumeGizmos,
 };
 
 /// Adds the caustics inspector window (and `EguiPlugin`, `RenderDiagnosticsPlugin` and
@@ -317,6 +318,7 @@ fn selected_components(
     edit_component::<CausticsVolume>(world, e, ui, registry);
     edit_component::<CausticsVolumeGizmos>(world, e, ui, registry);
     if world.get::<Caustics>(e).is_some() {
+        pass_switches(world, e, ui);
         ui.horizontal(|ui| {
             if world.get::<AapsSettings>(e).is_none() && ui.button("Add AapsSettings").clicked() {
                 world.entity_mut(e).insert(AapsSettings::default());
@@ -342,6 +344,65 @@ fn selected_components(
         if ui.button("Override with CausticMaterial").clicked() {
             world.entity_mut(e).insert(derived);
         }
+    }
+}
+
+/// Switches for the passes that can run or not on their own, each a shortcut for the setting
+/// that controls it (the setting stays the single source of truth): the composite (the debug
+/// view `Hidden`), AAPS's small-splat MSAA pass (`msaa_threshold` 0 or its default) and density
+/// update (`adaptive`), the volumes' blur pass (`blur_radius` 0 or 1) and differential updates.
+fn pass_switches(world: &mut World, camera: Entity, ui: &mut egui::Ui) {
+    let Some(c) = world.get::<Caustics>(camera).cloned() else {
+        return;
+    };
+    ui.label(egui::RichText::new("Passes").strong());
+    let mut composite = c.debug_view != CausticsDebugView::Hidden;
+    if ui.checkbox(&mut composite, "composite").changed()
+        && let Some(mut c) = world.get_mut::<Caustics>(camera)
+    {
+        c.debug_view = if composite {
+            CausticsDebugView::Off
+        } else {
+            CausticsDebugView::Hidden
+        };
+    }
+    match c.technique {
+        crate::CausticsTechnique::Aaps => {
+            let a = world
+                .get::<AapsSettings>(camera)
+                .cloned()
+                .unwrap_or_default();
+            let (mut msaa, mut update) = (a.msaa_threshold > 0.0, a.adaptive);
+            let m = ui.checkbox(&mut msaa, "AAPS small-splat MSAA").changed();
+            let u = ui.checkbox(&mut update, "AAPS density update").changed();
+            if m || u {
+                let default_msaa = AapsSettings::default().msaa_threshold;
+                let mut a = a;
+                a.msaa_threshold = if msaa { default_msaa } else { 0.0 };
+                a.adaptive = update;
+                world.entity_mut(camera).insert(a);
+            }
+        }
+        crate::CausticsTechnique::Volume => {
+            let mut q = world.query::<&mut CausticsVolume>();
+            let first = q.iter(world).next().cloned();
+            if let Some(v) = first {
+                let (mut blur, mut diff) = (v.blur_radius > 0, v.differential);
+                let b = ui
+                    .checkbox(&mut blur, "volume blur (all volumes)")
+                    .changed();
+                let d = ui
+                    .checkbox(&mut diff, "volume differential updates")
+                    .changed();
+                if b || d {
+                    for mut v in q.iter_mut(world) {
+                        v.blur_radius = if blur { v.blur_radius.max(1) } else { 0 };
+                        v.differential = diff;
+                    }
+                }
+            }
+        }
+        crate::CausticsTechnique::Reference => {}
     }
 }
 
