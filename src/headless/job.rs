@@ -460,7 +460,7 @@ fn drive(
     handles: Res<Handles>,
     assets: Res<AssetServer>,
     mut cameras: Query<
-        (Entity, &mut Camera, &GlobalTransform, &Projection),
+        (&mut Camera, &GlobalTransform, &Projection),
         (Without<MainCamera>, Without<TwinCamera>),
     >,
     lights: Query<(), Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>>,
@@ -511,90 +511,10 @@ fn drive(
                 *phase = Phase::Spawned(n + 1);
                 return;
             }
-            let Some((cam_entity, mut cam, gt, projection)) = cameras.iter_mut().next() else {
-                return fail(
-                    format!("{} has no camera", job.0.scene.display()),
-                    &mut exit,
-                );
-            };
-            if lights.is_empty() {
-                return fail(
-                    format!(
-                        "{} has no lights (KHR_lights_punctual)",
-                        job.0.scene.display()
-                    ),
-                    &mut exit,
-                );
+            match spawn_cameras(&mut commands, &job.0, &handles, &mut cameras, &lights) {
+                Ok(()) => *phase = Phase::Tracing,
+                Err(e) => fail(e, &mut exit),
             }
-            cam.is_active = false;
-            let _ = cam_entity;
-            let mut projection = projection.clone();
-            if let Projection::Perspective(p) = &mut projection {
-                p.aspect_ratio = job.0.width as f32 / job.0.height as f32;
-            }
-            let caustics = Caustics {
-                technique: job.0.technique,
-                quality: job.0.photons.map_or(CausticsQuality::Medium, |photons| {
-                    CausticsQuality::Custom { photons }
-                }),
-                seed: job.0.seed,
-                ..default()
-            };
-            let exposure = job
-                .0
-                .ev100
-                .map_or_else(bevy::camera::Exposure::default, |ev100| {
-                    bevy::camera::Exposure { ev100 }
-                });
-            let tonemapping = if job.0.linear {
-                Tonemapping::None
-            } else {
-                Tonemapping::default()
-            };
-            let transform = gt.compute_transform();
-            let mut main = commands.spawn((
-                job.0.aaps.clone(),
-                MainCamera,
-                Camera3d::default(),
-                Camera {
-                    order: 1,
-                    ..default()
-                },
-                Hdr,
-                Msaa::Off,
-                projection.clone(),
-                transform,
-                tonemapping,
-                exposure,
-                caustics,
-            ));
-            if !job.0.window {
-                main.insert(RenderTarget::Image(handles.target.clone().into()));
-            }
-
-            if let Some(twin) = &handles.twin {
-                commands.spawn((
-                    TwinCamera,
-                    Camera3d::default(),
-                    Camera {
-                        order: 2,
-                        ..default()
-                    },
-                    RenderTarget::Image(twin.clone().into()),
-                    Hdr,
-                    Msaa::Off,
-                    bevy::core_pipeline::prepass::DeferredPrepass,
-                    bevy::core_pipeline::prepass::DepthPrepass,
-                    projection,
-                    transform,
-                    tonemapping,
-                    exposure,
-                ));
-            }
-            if let Some(hook) = job.0.hook {
-                commands.queue(move |world: &mut World| hook(world));
-            }
-            *phase = Phase::Tracing;
         }
         Phase::Tracing => {
             let Ok((status, _, progress)) = main.single() else {
@@ -689,83 +609,184 @@ fn drive(
                 return;
             }
             let mut o = shared.0.lock().expect("state");
-            let (w, h) = (job.0.width, job.0.height);
-            o.report.technique = job.0.technique.name().to_string();
-            o.report.size = [w, h];
-            o.report.warnings = warnings.messages.clone();
-            // Prefer GPU timestamps; fall back to CPU spans where the adapter has none.
-            let gpu: Vec<_> = o
-                .pass_samples
-                .keys()
-                .filter(|k| k.ends_with("@gpu"))
-                .cloned()
-                .collect();
-            let clock = if gpu.is_empty() { "cpu" } else { "gpu" };
-            o.report.timing = clock.to_string();
-            o.pass_samples = std::mem::take(&mut o.pass_samples)
-                .into_iter()
-                .filter_map(|(k, v)| {
-                    k.strip_suffix(&format!("@{clock}"))
-                        .map(|p| (p.to_string(), v))
-                })
-                .collect();
-            if job.0.technique == CausticsTechnique::Volume
-                && let Some(snap) = o.snapshot.take()
-            {
-                let v = super::volume::VolumeCounters::from_words(&snap.counters);
-                o.report.photons_traced = v.hits;
-                o.report.volume = Some(v);
-                o.report.caustics = Some(snap.image);
-            } else if let Some(snap) = o.snapshot.take() {
-                let c = AapsCounters::from_snapshot(&snap);
-                o.report.photons_traced = c.photons_emitted;
-                o.report.photons_in_view = c.splats;
-                o.report.aaps = Some(c);
-                o.report.caustics = Some(snap.image);
-            } else if job.0.technique != CausticsTechnique::Reference {
-                o.error
-                    .get_or_insert("the caustics buffer readback did not arrive".to_string());
-            } else if let Ok((_, image, _)) = main.single() {
-                if let Some(img) = image {
-                    o.report.caustics = Some((*img.image).clone());
-                    o.report.photons_traced = img.stats.photons_emitted;
-                    o.report.photons_in_view = img.stats.photons_in_view;
-                    o.report.reference_seconds = img.seconds;
-                } else {
-                    o.report.caustics = Some(CausticImage::new(w, h));
-                }
-            }
-            let bytes = format_bytes(if job.0.linear {
-                TextureFormat::Rgba16Float
-            } else {
-                TextureFormat::Rgba8UnormSrgb
-            });
-            let data = unpad_rows(&o.report.frame_rgba8, w, h, bytes);
-            if job.0.linear {
-                o.report.linear_with = decode_f16_rgba(&data);
-                o.report.linear_without = decode_f16_rgba(&unpad_rows(&o.twin_raw, w, h, 8));
-                o.report.frame_rgba8 = o
-                    .report
-                    .linear_with
-                    .iter()
-                    .flat_map(|p| tonemap_preview(*p))
-                    .collect();
-            } else {
-                o.report.frame_rgba8 = data;
-            }
-            o.report.exposure = job
-                .0
-                .ev100
-                .map_or_else(bevy::camera::Exposure::default, |ev100| {
-                    bevy::camera::Exposure { ev100 }
-                })
-                .exposure();
-            if o.report.frame_rgba8.len() != (w * h * 4) as usize {
-                o.error
-                    .get_or_insert("the frame readback did not arrive".to_string());
-            }
+            let reference = main.single().ok().and_then(|(_, image, _)| image);
+            finish_report(&job.0, &mut o, &warnings, reference);
             o.finished = true;
             exit.write(AppExit::Success);
         }
     }
+}
+
+/// Stage `Spawned`: the glTF's camera (deactivated) gives its projection and transform to the
+/// job's camera, with the job's technique, exposure and target; plus the twin camera without
+/// caustics for linear jobs, and the job's hook.
+#[allow(clippy::type_complexity)]
+fn spawn_cameras(
+    commands: &mut Commands,
+    job: &RenderJob,
+    handles: &Handles,
+    cameras: &mut Query<
+        (&mut Camera, &GlobalTransform, &Projection),
+        (Without<MainCamera>, Without<TwinCamera>),
+    >,
+    lights: &Query<(), Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>>,
+) -> Result<(), String> {
+    let Some((mut cam, gt, projection)) = cameras.iter_mut().next() else {
+        return Err(format!("{} has no camera", job.scene.display()));
+    };
+    if lights.is_empty() {
+        return Err(format!(
+            "{} has no lights (KHR_lights_punctual)",
+            job.scene.display()
+        ));
+    }
+    cam.is_active = false;
+    let mut projection = projection.clone();
+    if let Projection::Perspective(p) = &mut projection {
+        p.aspect_ratio = job.width as f32 / job.height as f32;
+    }
+    let caustics =
+        Caustics {
+            technique: job.technique,
+            quality: job.photons.map_or(CausticsQuality::Medium, |photons| {
+                CausticsQuality::Custom { photons }
+            }),
+            seed: job.seed,
+            ..default()
+        };
+    let exposure = job_exposure(job);
+    let tonemapping = if job.linear {
+        Tonemapping::None
+    } else {
+        Tonemapping::default()
+    };
+    let transform = gt.compute_transform();
+    let mut main = commands.spawn((
+        job.aaps.clone(),
+        MainCamera,
+        Camera3d::default(),
+        Camera {
+            order: 1,
+            ..default()
+        },
+        Hdr,
+        Msaa::Off,
+        projection.clone(),
+        transform,
+        tonemapping,
+        exposure,
+        caustics,
+    ));
+    if !job.window {
+        main.insert(RenderTarget::Image(handles.target.clone().into()));
+    }
+
+    if let Some(twin) = &handles.twin {
+        commands.spawn((
+            TwinCamera,
+            Camera3d::default(),
+            Camera {
+                order: 2,
+                ..default()
+            },
+            RenderTarget::Image(twin.clone().into()),
+            Hdr,
+            Msaa::Off,
+            bevy::core_pipeline::prepass::DeferredPrepass,
+            bevy::core_pipeline::prepass::DepthPrepass,
+            projection,
+            transform,
+            tonemapping,
+            exposure,
+        ));
+    }
+    if let Some(hook) = job.hook {
+        commands.queue(move |world: &mut World| hook(world));
+    }
+    Ok(())
+}
+
+/// Stage `Finishing`: the report from the readbacks (caustics buffer and counters, frame, twin
+/// frame) or the reference image, with the pass times of the clock the adapter has.
+fn finish_report(
+    job: &RenderJob,
+    o: &mut Outcome,
+    warnings: &crate::CausticsWarnings,
+    reference: Option<&CausticsReferenceImage>,
+) {
+    let (w, h) = (job.width, job.height);
+    o.report.technique = job.technique.name().to_string();
+    o.report.size = [w, h];
+    o.report.warnings = warnings.messages.clone();
+    // Prefer GPU timestamps; fall back to CPU spans where the adapter has none.
+    let gpu: Vec<_> = o
+        .pass_samples
+        .keys()
+        .filter(|k| k.ends_with("@gpu"))
+        .cloned()
+        .collect();
+    let clock = if gpu.is_empty() { "cpu" } else { "gpu" };
+    o.report.timing = clock.to_string();
+    o.pass_samples = std::mem::take(&mut o.pass_samples)
+        .into_iter()
+        .filter_map(|(k, v)| {
+            k.strip_suffix(&format!("@{clock}"))
+                .map(|p| (p.to_string(), v))
+        })
+        .collect();
+    if job.technique == CausticsTechnique::Volume
+        && let Some(snap) = o.snapshot.take()
+    {
+        let v = super::volume::VolumeCounters::from_words(&snap.counters);
+        o.report.photons_traced = v.hits;
+        o.report.volume = Some(v);
+        o.report.caustics = Some(snap.image);
+    } else if let Some(snap) = o.snapshot.take() {
+        let c = AapsCounters::from_snapshot(&snap);
+        o.report.photons_traced = c.photons_emitted;
+        o.report.photons_in_view = c.splats;
+        o.report.aaps = Some(c);
+        o.report.caustics = Some(snap.image);
+    } else if job.technique != CausticsTechnique::Reference {
+        o.error
+            .get_or_insert("the caustics buffer readback did not arrive".to_string());
+    } else if let Some(img) = reference {
+        o.report.caustics = Some((*img.image).clone());
+        o.report.photons_traced = img.stats.photons_emitted;
+        o.report.photons_in_view = img.stats.photons_in_view;
+        o.report.reference_seconds = img.seconds;
+    } else {
+        o.report.caustics = Some(CausticImage::new(w, h));
+    }
+    let bytes = format_bytes(if job.linear {
+        TextureFormat::Rgba16Float
+    } else {
+        TextureFormat::Rgba8UnormSrgb
+    });
+    let data = unpad_rows(&o.report.frame_rgba8, w, h, bytes);
+    if job.linear {
+        o.report.linear_with = decode_f16_rgba(&data);
+        o.report.linear_without = decode_f16_rgba(&unpad_rows(&o.twin_raw, w, h, 8));
+        o.report.frame_rgba8 = o
+            .report
+            .linear_with
+            .iter()
+            .flat_map(|p| tonemap_preview(*p))
+            .collect();
+    } else {
+        o.report.frame_rgba8 = data;
+    }
+    o.report.exposure = job_exposure(job).exposure();
+    if o.report.frame_rgba8.len() != (w * h * 4) as usize {
+        o.error
+            .get_or_insert("the frame readback did not arrive".to_string());
+    }
+}
+
+/// The job's camera exposure: its EV100, else Bevy's default.
+fn job_exposure(job: &RenderJob) -> bevy::camera::Exposure {
+    job.ev100
+        .map_or_else(bevy::camera::Exposure::default, |ev100| {
+            bevy::camera::Exposure { ev100 }
+        })
 }
