@@ -4,13 +4,13 @@
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::prelude::*;
-use bevy::render::diagnostic::RecordDiagnostics;
+use bevy::render::diagnostic::{DiagnosticsRecorder, RecordDiagnostics};
 use bevy::render::render_resource::{
     BindGroup, BindGroupEntries, BindGroupEntry, BindingResource, BufferBinding,
     ComputePassDescriptor, Extent3d, LoadOp, Operations, PipelineCache, RenderPassColorAttachment,
-    RenderPassDescriptor, StoreOp, TexelCopyTextureInfo,
+    RenderPassDescriptor, RenderPipeline, StoreOp, TexelCopyTextureInfo, TextureView,
 };
-use bevy::render::renderer::{RenderContext, ViewQuery};
+use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 
 use super::pipelines::AapsPipelines;
 use super::scene::AapsSceneBuffers;
@@ -98,52 +98,14 @@ pub fn aaps_passes(
         update,
         scale,
     ] = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| compute[i]);
-    let device = ctx.render_device().clone();
-    let b = &scene.buffers;
-    let main: BindGroup = device.create_bind_group(
-        "caustics:bind_group:aaps",
-        &cache.get_bind_group_layout(&pipelines.compute_layout),
-        &BindGroupEntries::sequential((
-            b[0].as_entire_binding(),
-            b[1].as_entire_binding(),
-            b[2].as_entire_binding(),
-            b[3].as_entire_binding(),
-            b[4].as_entire_binding(),
-            b[5].as_entire_binding(),
-            b[6].as_entire_binding(),
-            state.quadtree.as_entire_binding(),
-            b[7].as_entire_binding(),
-            state.params.as_entire_binding(),
-            state.splats.as_entire_binding(),
-            state.accum.as_entire_binding(),
-            state.density[0].as_entire_binding(),
-            state.density[1].as_entire_binding(),
-            &buffer.view,
-            &state.history.1,
-            BindingResource::Buffer(BufferBinding {
-                buffer: &state.levels,
-                offset: 0,
-                size: Some(core::num::NonZeroU64::new(16).unwrap()),
-            }),
-        )),
-    );
-    let args = device.create_bind_group(
-        "caustics:bind_group:aaps_args",
-        &cache.get_bind_group_layout(&pipelines.args_layout),
-        &[BindGroupEntry {
-            binding: 0,
-            resource: state.args.as_entire_binding(),
-        }],
-    );
-    let splat_group = device.create_bind_group(
-        "caustics:bind_group:aaps_splat",
-        &cache.get_bind_group_layout(&pipelines.splat_layout),
-        &BindGroupEntries::sequential((
-            state.params.as_entire_binding(),
-            state.splats.as_entire_binding(),
-            depth,
-            state.world_from_clip.as_entire_binding(),
-        )),
+    let (main, args, splat_group) = bind_groups(
+        ctx.render_device(),
+        &cache,
+        &pipelines,
+        &scene,
+        state,
+        buffer,
+        depth,
     );
     let [atlas, ..] = state.key.atlas;
     let texel_groups = (atlas * atlas).div_ceil(64);
@@ -224,8 +186,116 @@ pub fn aaps_passes(
     }
     log.record(TRACE_PASS);
 
-    // Small splats first: the resolve overwrites the caustics buffer with them, then the plain
-    // splats are blended on top.
+    splat_passes(
+        &mut ctx,
+        diagnostics,
+        state,
+        buffer,
+        (splat, splat_msaa),
+        &splat_group,
+        &log,
+    );
+
+    // Next frame's distribution: variance by reprojection, D' and the blend, the budget.
+    if state.settings.adaptive {
+        let encoder = ctx.command_encoder();
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("caustics_aaps_update"),
+            timestamp_writes: None,
+        });
+        let span = diagnostics.pass_span(&mut pass, UPDATE_PASS);
+        pass.set_bind_group(0, &main, &[0]);
+        pass.set_pipeline(variance);
+        pass.dispatch_workgroups_indirect(&state.args, 4 * 4);
+        pass.set_pipeline(update);
+        pass.dispatch_workgroups(texel_groups, 1, 1);
+        pass.set_pipeline(scale);
+        pass.dispatch_workgroups(texel_groups, 1, 1);
+        span.end(&mut pass);
+        log.record(UPDATE_PASS);
+    }
+    for (name, word) in COUNTERS {
+        diagnostics.record_u32(
+            ctx.command_encoder(),
+            &state.accum.slice(word * 4..word * 4 + 4),
+            name,
+        );
+    }
+}
+
+/// The view's three bind groups: the compute passes' (scene, task buffer, accumulators,
+/// caustics buffer and its history, per-level uniforms), the indirect arguments', and the
+/// splat passes'.
+fn bind_groups(
+    device: &RenderDevice,
+    cache: &PipelineCache,
+    pipelines: &AapsPipelines,
+    scene: &AapsSceneBuffers,
+    state: &AapsViewState,
+    buffer: &ViewCausticsBuffer,
+    depth: &TextureView,
+) -> (BindGroup, BindGroup, BindGroup) {
+    let b = &scene.buffers;
+    let main: BindGroup = device.create_bind_group(
+        "caustics:bind_group:aaps",
+        &cache.get_bind_group_layout(&pipelines.compute_layout),
+        &BindGroupEntries::sequential((
+            b[0].as_entire_binding(),
+            b[1].as_entire_binding(),
+            b[2].as_entire_binding(),
+            b[3].as_entire_binding(),
+            b[4].as_entire_binding(),
+            b[5].as_entire_binding(),
+            b[6].as_entire_binding(),
+            state.quadtree.as_entire_binding(),
+            b[7].as_entire_binding(),
+            state.params.as_entire_binding(),
+            state.splats.as_entire_binding(),
+            state.accum.as_entire_binding(),
+            state.density[0].as_entire_binding(),
+            state.density[1].as_entire_binding(),
+            &buffer.view,
+            &state.history.1,
+            BindingResource::Buffer(BufferBinding {
+                buffer: &state.levels,
+                offset: 0,
+                size: Some(core::num::NonZeroU64::new(16).unwrap()),
+            }),
+        )),
+    );
+    let args = device.create_bind_group(
+        "caustics:bind_group:aaps_args",
+        &cache.get_bind_group_layout(&pipelines.args_layout),
+        &[BindGroupEntry {
+            binding: 0,
+            resource: state.args.as_entire_binding(),
+        }],
+    );
+    let splat_group = device.create_bind_group(
+        "caustics:bind_group:aaps_splat",
+        &cache.get_bind_group_layout(&pipelines.splat_layout),
+        &BindGroupEntries::sequential((
+            state.params.as_entire_binding(),
+            state.splats.as_entire_binding(),
+            depth,
+            state.world_from_clip.as_entire_binding(),
+        )),
+    );
+    (main, args, splat_group)
+}
+
+/// The splat passes: small splats into the MSAA target resolved into the caustics buffer
+/// (overwriting it), then the plain splats blended on top (clearing it first when there was no
+/// MSAA pass).
+fn splat_passes(
+    ctx: &mut RenderContext,
+    diagnostics: Option<&DiagnosticsRecorder>,
+    state: &AapsViewState,
+    buffer: &ViewCausticsBuffer,
+    (splat, splat_msaa): (&RenderPipeline, Option<&RenderPipeline>),
+    splat_group: &BindGroup,
+    log: &CausticsDispatchLog,
+) {
     let mut cleared = false;
     if let (Some(pipeline), Some((_, msaa_view))) = (splat_msaa, &state.msaa) {
         let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
@@ -246,7 +316,7 @@ pub fn aaps_passes(
         });
         let span = diagnostics.pass_span(&mut pass, SPLAT_MSAA_PASS);
         pass.set_render_pipeline(pipeline);
-        pass.set_bind_group(0, &splat_group, &[]);
+        pass.set_bind_group(0, splat_group, &[]);
         pass.draw_indirect(&state.args, 12 * 4);
         span.end(&mut pass);
         cleared = true;
@@ -275,35 +345,9 @@ pub fn aaps_passes(
         });
         let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
         pass.set_render_pipeline(splat);
-        pass.set_bind_group(0, &splat_group, &[]);
+        pass.set_bind_group(0, splat_group, &[]);
         pass.draw_indirect(&state.args, 8 * 4);
         span.end(&mut pass);
     }
     log.record(SPLAT_PASS);
-
-    // Next frame's distribution: variance by reprojection, D' and the blend, the budget.
-    if state.settings.adaptive {
-        let encoder = ctx.command_encoder();
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some("caustics_aaps_update"),
-            timestamp_writes: None,
-        });
-        let span = diagnostics.pass_span(&mut pass, UPDATE_PASS);
-        pass.set_bind_group(0, &main, &[0]);
-        pass.set_pipeline(variance);
-        pass.dispatch_workgroups_indirect(&state.args, 4 * 4);
-        pass.set_pipeline(update);
-        pass.dispatch_workgroups(texel_groups, 1, 1);
-        pass.set_pipeline(scale);
-        pass.dispatch_workgroups(texel_groups, 1, 1);
-        span.end(&mut pass);
-        log.record(UPDATE_PASS);
-    }
-    for (name, word) in COUNTERS {
-        diagnostics.record_u32(
-            ctx.command_encoder(),
-            &state.accum.slice(word * 4..word * 4 + 4),
-            name,
-        );
-    }
 }
