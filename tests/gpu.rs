@@ -513,7 +513,10 @@ fn churn_for_a_thousand_frames() {
         }
     }
     let mut growth = Vec::new();
-    for churn in [0, 1, 2] {
+    // The baseline (no churn) runs twice and the larger growth counts: the allocator sometimes
+    // hands memory back during a run, which makes one baseline low (365.7 MiB once, against
+    // 413.0 to 415.5 MiB in 8 other runs) and a sound churn look like a 49 MiB leak.
+    for churn in [0, 0, 1, 2] {
         CHURN.store(churn, Ordering::Relaxed);
         RSS.lock().unwrap().clear();
         let report = run(RenderJob {
@@ -548,6 +551,8 @@ fn churn_for_a_thousand_frames() {
         assert!(report.warnings.is_empty(), "{:?}", report.warnings);
         growth.push(rss[1].1 as f64 - rss[0].1 as f64);
     }
+    let baseline = growth.remove(0).max(growth.remove(0));
+    growth.insert(0, baseline);
     let mib = |b: f64| b / 1048576.0;
     println!(
         "memory growth frames 200-999: without churn {:.1} MiB, with churn {:.1} MiB, with churn and the technique cycling {:.1} MiB",
