@@ -32,7 +32,8 @@ use crate::{
 };
 
 /// Adds the caustics inspector window (and `EguiPlugin`, `RenderDiagnosticsPlugin` and
-/// `FrameTimeDiagnosticsPlugin` if the app has not added them).
+/// `FrameTimeDiagnosticsPlugin` if the app has not added them: an app that adds any of those
+/// itself adds it before this plugin, as Bevy refuses a plugin added twice).
 #[derive(Default)]
 pub struct CausticsInspectorPlugin;
 
