@@ -118,6 +118,8 @@ pub struct LiveImage {
 /// The inspector's live images and the camera they show.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct InspectorImages {
+    /// The panel is open: while it is closed no image is drawn, whatever `shown` says.
+    pub open: bool,
     /// The camera whose buffers are shown (main-world entity).
     pub camera: Option<Entity>,
     /// The images.
@@ -242,7 +244,7 @@ fn colour_map_pass(
     let (Some(images), Some(pipeline)) = (images, pipeline) else {
         return;
     };
-    if images.camera != Some(main.id()) || !images.images.iter().any(|i| i.shown) {
+    if !images.open || images.camera != Some(main.id()) || !images.images.iter().any(|i| i.shown) {
         return;
     }
     let Some(compute) = cache.get_compute_pipeline(pipeline.id) else {

@@ -173,6 +173,10 @@ fn edit_component<
 
 fn inspector_window(world: &mut World) {
     if !world.resource::<CausticsInspector>().open {
+        // Closed: the live images stop (written once, so the resource is not re-extracted).
+        if world.resource::<InspectorImages>().open {
+            world.resource_mut::<InspectorImages>().open = false;
+        }
         return;
     }
     let mut contexts = world.query_filtered::<&mut EguiContext, With<PrimaryEguiContext>>();
@@ -219,6 +223,7 @@ fn inspector_window(world: &mut World) {
     let registry = world.resource::<AppTypeRegistry>().clone();
     let registry = registry.read();
     let mut live = world.resource::<InspectorImages>().clone();
+    live.open = true;
     live.camera = camera;
     live.volume = state
         .selected
