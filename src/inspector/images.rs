@@ -103,7 +103,7 @@ impl LiveKind {
 }
 
 /// One live image.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LiveImage {
     /// What it shows.
     pub kind: LiveKind,
@@ -116,7 +116,7 @@ pub struct LiveImage {
 }
 
 /// The inspector's live images and the camera they show.
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct InspectorImages {
     /// The panel is open: while it is closed no image is drawn, whatever `shown` says.
     pub open: bool,

@@ -38,7 +38,7 @@ use crate::{
 pub struct CausticsInspectorPlugin;
 
 /// The inspector's state.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Clone, Debug, PartialEq)]
 pub struct CausticsInspector {
     /// The window is shown (F1 toggles).
     pub open: bool,
@@ -211,28 +211,15 @@ fn inspector_window(world: &mut World) {
             .and_then(|d| d.smoothed());
         (stats, fps)
     };
-    // The camera whose images are shown: the selected one, else the first.
-    let camera = state
-        .selected
-        .filter(|e| world.get::<Caustics>(*e).is_some())
-        .or_else(|| {
-            rows.iter()
-                .find(|r| r.kind == EntityKind::Camera)
-                .map(|r| r.entity)
-        });
+    // The camera and volume whose images are shown: the selected one, else the first.
+    let camera = selected_or_first::<Caustics>(world, state.selected, &rows, EntityKind::Camera);
     let registry = world.resource::<AppTypeRegistry>().clone();
     let registry = registry.read();
     let mut live = world.resource::<InspectorImages>().clone();
     live.open = true;
     live.camera = camera;
-    live.volume = state
-        .selected
-        .filter(|e| world.get::<CausticsVolume>(*e).is_some())
-        .or_else(|| {
-            rows.iter()
-                .find(|r| r.kind == EntityKind::Volume)
-                .map(|r| r.entity)
-        });
+    live.volume =
+        selected_or_first::<CausticsVolume>(world, state.selected, &rows, EntityKind::Volume);
     let slabs = live
         .volume
         .and_then(|e| world.get::<CausticsVolume>(e))
@@ -284,8 +271,25 @@ fn inspector_window(world: &mut World) {
         .show(&ctx, |ui| {
             live_images(ui, &mut live, slabs, &textures, &sizes);
         });
-    *world.resource_mut::<CausticsInspector>() = state;
-    *world.resource_mut::<InspectorImages>() = live;
+    // Written back only when changed: the images resource is extracted on change.
+    if *world.resource::<CausticsInspector>() != state {
+        *world.resource_mut::<CausticsInspector>() = state;
+    }
+    if *world.resource::<InspectorImages>() != live {
+        *world.resource_mut::<InspectorImages>() = live;
+    }
+}
+
+/// `selected` if it has component `C`, else the first listed entity of `kind`.
+fn selected_or_first<C: Component>(
+    world: &World,
+    selected: Option<Entity>,
+    rows: &[Row],
+    kind: EntityKind,
+) -> Option<Entity> {
+    selected
+        .filter(|e| world.get::<C>(*e).is_some())
+        .or_else(|| rows.iter().find(|r| r.kind == kind).map(|r| r.entity))
 }
 
 fn entity_list(ui: &mut egui::Ui, rows: &[Row], state: &mut CausticsInspector) {
