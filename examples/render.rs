@@ -5,7 +5,7 @@
 //! cargo run --release --example render -- SCENE.gltf --technique reference --width 256 \
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
-//!     [--volume field=value,...]
+//!     [--volume field=value,...] [--image-space field=value,...]
 //! ```
 //!
 //! The scene path is relative to the working directory (its buffers and images to the glTF's
@@ -59,7 +59,9 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
             "--technique" => {
                 let t = v.ok_or("--technique needs a value")?;
                 job.technique = CausticsTechnique::from_name(t).ok_or_else(|| {
-                    format!("unknown technique '{t}' (available: reference, aaps, volume)")
+                    format!(
+                        "unknown technique '{t}' (available: reference, aaps, volume, image_space)"
+                    )
                 })?;
             }
             // Saturating: a value past u32 stays out of range for `check_job` to refuse.
@@ -140,6 +142,38 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                     }
                 }
             }
+            "--image-space" => {
+                // Image-space settings as `field=value,...` (ImageSpaceSettings names).
+                let t = v.ok_or("--image-space needs field=value pairs")?;
+                for kv in t.split(',') {
+                    let (k, x) = kv
+                        .split_once('=')
+                        .ok_or_else(|| format!("--image-space expects field=value, got '{kv}'"))?;
+                    let f = || {
+                        x.parse::<f32>()
+                            .ok()
+                            .filter(|x| x.is_finite())
+                            .ok_or_else(|| format!("--image-space {k} expects a number, got '{x}'"))
+                    };
+                    let a = &mut job.image_space;
+                    match k {
+                        "rsm_resolution" => a.rsm_resolution = f()? as u32,
+                        "luminance_cutoff" => a.luminance_cutoff = f()?,
+                        "stride" => a.stride = f()? as u32,
+                        "thickness" => a.thickness = f()?,
+                        "denoise" => a.denoise = f()? != 0.0,
+                        "alpha_color" => a.alpha_color = f()?,
+                        "alpha_moments" => a.alpha_moments = f()?,
+                        "history_cap" => a.history_cap = f()? as u32,
+                        "atrous_iterations" => a.atrous_iterations = f()? as u32,
+                        "sigma_depth" => a.sigma_depth = f()?,
+                        "sigma_normal" => a.sigma_normal = f()?,
+                        "sigma_luminance" => a.sigma_luminance = f()?,
+                        "reset_on_change" => a.reset_on_change = f()? != 0.0,
+                        _ => return Err(format!("--image-space: unknown field '{k}'")),
+                    }
+                }
+            }
             "--out-exr" => out.exr = Some(path(v)?),
             "--out-png" => out.png = Some(path(v)?),
             "--json" => out.json = Some(path(v)?),
@@ -155,7 +189,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...]")?;
     Ok((job, out))
 }
 

@@ -1,7 +1,7 @@
 //! Error against run time, for every scene and technique: `REPORT.md` plus one SVG per scene.
 //!
 //! ```text
-//! cargo run --release --example report -- [--scenes a,b,..] [--techniques reference,aaps] \
+//! cargo run --release --example report -- [--scenes a,b,..] [--techniques reference,aaps,image_space] \
 //!     [--out DIR] [--size N]
 //! ```
 //!
@@ -37,6 +37,13 @@ struct Point {
     metrics: ImageMetrics,
 }
 
+/// The image-space quality levels: (name, photons per light and frame, RSM side).
+const IMAGE_SPACE_LEVELS: [(&str, u64, u32); 3] = [
+    ("low: 2^16/light, RSM 512", 1 << 16, 512),
+    ("medium: 2^18/light, RSM 1024", 1 << 18, 1024),
+    ("high: 2^20/light, RSM 1024", 1 << 20, 1024),
+];
+
 fn main() {
     bevy_caustics::headless::quiet_headless_environment();
     if let Err(e) = real_main() {
@@ -58,7 +65,11 @@ fn real_main() -> Result<(), String> {
     ]
     .map(String::from)
     .to_vec();
-    let mut techniques = vec![CausticsTechnique::Reference, CausticsTechnique::Aaps];
+    let mut techniques = vec![
+        CausticsTechnique::Reference,
+        CausticsTechnique::Aaps,
+        CausticsTechnique::ImageSpace,
+    ];
     let mut out = root.join("report");
     let mut size = 128u32;
     let mut i = 0;
@@ -73,7 +84,7 @@ fn real_main() -> Result<(), String> {
                     .split(',')
                     .map(|t| {
                         CausticsTechnique::from_name(t).ok_or_else(|| {
-                            format!("unknown technique '{t}' (available: reference, aaps)")
+                            format!("unknown technique '{t}' (available: reference, aaps, volume, image_space)")
                         })
                     })
                     .collect::<Result<_, _>>()?
@@ -100,7 +111,13 @@ fn real_main() -> Result<(), String> {
         progress(step, total, &format!("{scene}: converged reference"));
         let reference = converged(&root, &path, scene, size)?;
         for technique in &techniques {
-            let runs: Vec<(String, u64, bevy_caustics::AapsSettings)> = match technique {
+            type Run = (
+                String,
+                u64,
+                bevy_caustics::AapsSettings,
+                bevy_caustics::ImageSpaceSettings,
+            );
+            let runs: Vec<Run> = match technique {
                 CausticsTechnique::Aaps => AAPS_LEVELS
                     .iter()
                     .map(|(name, budget, target)| {
@@ -108,15 +125,28 @@ fn real_main() -> Result<(), String> {
                             target_area: *target,
                             ..Default::default()
                         };
-                        (name.to_string(), *budget, settings)
+                        (name.to_string(), *budget, settings, Default::default())
+                    })
+                    .collect(),
+                CausticsTechnique::ImageSpace => IMAGE_SPACE_LEVELS
+                    .iter()
+                    .map(|(name, photons, rsm)| {
+                        let settings = bevy_caustics::ImageSpaceSettings {
+                            rsm_resolution: *rsm,
+                            ..Default::default()
+                        };
+                        (name.to_string(), *photons, Default::default(), settings)
                     })
                     .collect(),
                 _ => sweep
                     .iter()
-                    .map(|p| (format!("{p} photons/light"), *p, Default::default()))
+                    .map(|p| {
+                        let name = format!("{p} photons/light");
+                        (name, *p, Default::default(), Default::default())
+                    })
                     .collect(),
             };
-            for (quality, photons, settings) in runs {
+            for (quality, photons, settings, image_space) in runs {
                 step += 1;
                 progress(
                     step,
@@ -132,6 +162,7 @@ fn real_main() -> Result<(), String> {
                     seed: SWEEP_SEED,
                     frames: 12,
                     aaps: settings,
+                    image_space,
                     ..Default::default()
                 })?;
                 let image = report

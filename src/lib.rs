@@ -40,7 +40,8 @@ use bevy::render::renderer::{RenderAdapter, RenderDevice};
 pub use components::validate::CausticsWarnings;
 pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
-    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace, mark_every_light,
+    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, ImageSpaceSettings, VolumeFace,
+    mark_every_light,
 };
 #[cfg(feature = "inspector")]
 pub use inspector::CausticsInspectorPlugin;
@@ -51,7 +52,8 @@ pub use render::CausticsDispatchLog;
 pub mod prelude {
     pub use crate::{
         AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
-        CausticsQuality, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, VolumeFace,
+        CausticsQuality, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos,
+        ImageSpaceSettings, VolumeFace,
     };
 }
 
@@ -127,6 +129,7 @@ impl Plugin for CausticsPlugin {
     fn build(&self, app: &mut App) {
         app.register_type::<Caustics>()
             .register_type::<AapsSettings>()
+            .register_type::<ImageSpaceSettings>()
             .register_type::<CausticLight>()
             .register_type::<CausticMaterial>()
             .register_type::<CausticsVolume>()

@@ -31,6 +31,10 @@ pub const MAX_IMAGE_SIDE: u32 = 8192;
 /// small-splat target).
 pub const VIEW_BYTES_PER_PIXEL: u64 = 4 * 16;
 
+/// Photons per light and frame of the image-space technique: one 2D dispatch of 64-thread
+/// workgroups (65 535 x 256 groups) holds more; 2^24 keeps a frame bounded.
+pub const MAX_IMAGE_SPACE_PHOTONS: u64 = 1 << 24;
+
 /// Bytes per texel of a volume's G-buffer layer (`Rgba32Float`).
 pub const GBUFFER_BYTES_PER_TEXEL: u64 = 16;
 
@@ -113,6 +117,8 @@ impl CausticsLimits {
     pub fn max_photons(&self, technique: CausticsTechnique) -> u64 {
         match technique {
             CausticsTechnique::Aaps => self.max_aaps_photons,
+            // One 2D dispatch of 64-thread workgroups per light (65 535 x 256 groups).
+            CausticsTechnique::ImageSpace => MAX_IMAGE_SPACE_PHOTONS,
             CausticsTechnique::Reference | CausticsTechnique::Volume => self.max_reference_photons,
         }
     }
@@ -133,6 +139,13 @@ impl CausticsLimits {
     /// `max_texture_bytes`; at least 16.
     pub fn volume_projector_side(&self, side: u32) -> u32 {
         self.layered_side(side, 6)
+    }
+
+    /// The largest reflective-shadow-map side at most `side` whose three `Rgba32Float` layers
+    /// fit `max_texture_bytes` (at most `max_volume_resolution`); at least 64.
+    pub fn rsm_side(&self, side: u32) -> u32 {
+        self.layered_side(side, 3)
+            .max(64.min(self.max_volume_resolution))
     }
 
     fn layered_side(&self, side: u32, layers: u32) -> u32 {

@@ -17,6 +17,8 @@ mod energy;
 mod examples;
 #[path = "gpu/first_use.rs"]
 mod first_use;
+#[path = "gpu/image_space.rs"]
+mod image_space;
 #[path = "gpu/twins.rs"]
 mod twins;
 #[path = "gpu/volume.rs"]
@@ -618,6 +620,28 @@ fn stiff_and_extreme_cases_gpu() {
         assert!(
             aaps.caustics.as_ref().unwrap().all_finite(),
             "{} (aaps): non-finite caustics",
+            case.name
+        );
+        // The image-space technique (64² RSMs): finite, and no NaN guard needed past the
+        // clamps the counters report.
+        let is = run(RenderJob {
+            scene: dir.join(format!("stiff_{i}.gltf")),
+            technique: bevy_caustics::CausticsTechnique::ImageSpace,
+            width: 32,
+            height: 32,
+            photons: Some(case.photons.min(1 << 14)),
+            frames: 4,
+            image_space: bevy_caustics::ImageSpaceSettings {
+                rsm_resolution: 64,
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("{} (image_space): {e}", case.name));
+        println!("{:<48} image_space {:?}", case.name, is.image_space);
+        assert!(
+            is.caustics.as_ref().unwrap().all_finite(),
+            "{} (image_space): non-finite caustics",
             case.name
         );
         // And caustics volumes (one fitted per light, 3 slabs; the gem's energy check needs

@@ -58,6 +58,12 @@ pub enum CausticsTechnique {
     /// something inside changes (differential updates); otherwise only the splats are drawn.
     /// Settings: the fields of [`crate::CausticsVolume`]. Without a volume nothing runs.
     Volume,
+    /// Cascaded image-space photon tracing (seed 003): photons start on each light's
+    /// reflective shadow maps (rasterised by the plugin), are marched through the light's
+    /// depth and then the camera's (no BVH, no ray tracing), land in a per-pixel photon map
+    /// and are denoised by SVGF. One specular event (two refractions through a closed glass
+    /// object). Milliseconds per frame. Settings: [`crate::ImageSpaceSettings`].
+    ImageSpace,
 }
 
 impl CausticsTechnique {
@@ -67,6 +73,7 @@ impl CausticsTechnique {
             Self::Reference => "reference",
             Self::Aaps => "aaps",
             Self::Volume => "volume",
+            Self::ImageSpace => "image_space",
         }
     }
 
@@ -76,6 +83,7 @@ impl CausticsTechnique {
             "reference" => Some(Self::Reference),
             "aaps" => Some(Self::Aaps),
             "volume" => Some(Self::Volume),
+            "image_space" => Some(Self::ImageSpace),
             _ => None,
         }
     }

@@ -5,6 +5,7 @@
 
 mod aaps;
 mod camera;
+mod image_space;
 mod light;
 mod material;
 pub mod validate;
@@ -12,6 +13,7 @@ mod volume;
 
 pub use aaps::*;
 pub use camera::*;
+pub use image_space::*;
 pub use light::*;
 pub use material::*;
 pub use volume::*;

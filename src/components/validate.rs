@@ -6,6 +6,7 @@ use bevy::prelude::*;
 
 use super::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsQuality, CausticsVolume,
+    ImageSpaceSettings,
 };
 use crate::limits::CausticsLimits;
 
@@ -243,6 +244,38 @@ pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> 
     fixes
 }
 
+/// Clamp image-space settings into range (see [`ImageSpaceSettings::sanitized_for`]);
+/// returns what was fixed, one entry per field that changed.
+pub fn sanitize_image_space(a: &mut ImageSpaceSettings, limits: &CausticsLimits) -> Vec<Fix> {
+    let fixed = a.sanitized_for(limits);
+    let mut fixes = Vec::new();
+    macro_rules! check {
+        ($($f:ident),*) => {$(
+            if fixed.$f != a.$f {
+                fixes.push((
+                    stringify!($f),
+                    format!("{:?} is out of range; clamped to {:?}", a.$f, fixed.$f),
+                ));
+            }
+        )*};
+    }
+    check!(
+        rsm_resolution,
+        luminance_cutoff,
+        stride,
+        thickness,
+        alpha_color,
+        alpha_moments,
+        history_cap,
+        atrous_iterations,
+        sigma_depth,
+        sigma_normal,
+        sigma_luminance
+    );
+    *a = fixed;
+    fixes
+}
+
 /// Clamp a camera's photon count (a `CausticsQuality::Custom` above what its technique
 /// allows on this device, [`CausticsLimits::max_photons`]); returns what was fixed.
 pub fn sanitize_caustics(c: &mut Caustics, limits: &CausticsLimits) -> Vec<Fix> {
@@ -298,6 +331,7 @@ pub(crate) fn plugin(app: &mut App) {
                 validate::<CausticLight>("CausticLight", |l, _| sanitize_light(l)),
                 validate::<CausticMaterial>("CausticMaterial", |m, _| sanitize_material(m)),
                 validate::<AapsSettings>("AapsSettings", sanitize_aaps),
+                validate::<ImageSpaceSettings>("ImageSpaceSettings", sanitize_image_space),
             )
                 .in_set(crate::CausticsSystems::Validate),
         );

@@ -73,6 +73,11 @@ pub struct RenderJob {
     pub limits: Option<CausticsLimits>,
     /// Settings of the `aaps` technique. Default: `AapsSettings::default()`.
     pub aaps: crate::AapsSettings,
+    /// Read the caustics buffer back at every measured frame into
+    /// [`RenderReport::frame_caustics`] (temporal tests). Default false.
+    pub every_frame: bool,
+    /// Settings of the `image_space` technique. Default: `ImageSpaceSettings::default()`.
+    pub image_space: crate::ImageSpaceSettings,
     /// Technique `volume`: the settings of the volumes fitted around the casters (one per
     /// light) when the scene declares none; its box and faces are ignored.
     pub volume: crate::CausticsVolume,
@@ -98,6 +103,8 @@ impl Default for RenderJob {
             forward: false,
             limits: None,
             aaps: Default::default(),
+            image_space: Default::default(),
+            every_frame: false,
             volume: Default::default(),
         }
     }
@@ -141,10 +148,15 @@ pub struct RenderReport {
     /// See `linear_with`.
     #[serde(skip)]
     pub linear_without: Vec<[f32; 4]>,
+    /// With `every_frame`: the caustics buffer of every measured frame, in order.
+    #[serde(skip)]
+    pub frame_caustics: Vec<CausticImage>,
     /// With `linear`: the camera's exposure.
     pub exposure: f32,
     /// AAPS counters of the last frame (technique `aaps` only).
     pub aaps: Option<AapsCounters>,
+    /// Image-space counters of the last frame (technique `image_space` only).
+    pub image_space: Option<ImageSpaceCounters>,
     /// Counters of the first visible volume (technique `volume` only).
     pub volume: Option<super::volume::VolumeCounters>,
     /// The caustics passes dispatched in each measured frame.
@@ -233,12 +245,76 @@ impl AapsCounters {
     }
 }
 
+/// The image-space counters of one frame (`C_*` in src/render/image_space/trace.wgsl), summed
+/// over the lights.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ImageSpaceCounters {
+    /// Photons traced: samples on a caster texel above the luminance cutoff.
+    pub photons_emitted: u64,
+    /// Samples on a texel without a caster (not traced).
+    pub skipped_empty: u64,
+    /// Samples under the luminance cutoff (not traced).
+    pub skipped_dim: u64,
+    /// Light-space marches that ended on a receiver.
+    pub light_hits: u64,
+    /// Light-space marches that left the light's map.
+    pub light_misses: u64,
+    /// Reprojected ends on the camera's surface.
+    pub reprojection_plane: u64,
+    /// Reprojected ends in front of the camera's surface (marched on).
+    pub reprojection_concave: u64,
+    /// Reprojected ends hidden behind the camera's surface (lost).
+    pub reprojection_convex: u64,
+    /// Photons deposited into the photon map.
+    pub camera_hits: u64,
+    /// Of which straight from the light march (plane case).
+    pub direct_hits: u64,
+    /// Photons lost off screen or without a surface found in the camera's depth.
+    pub misses: u64,
+    /// Photons that failed the normal test.
+    pub normal_rejects: u64,
+    /// Total internal reflections at a back face (dropped).
+    pub tir: u64,
+    /// Fixed-point words clamped (above 2^32 / 256 lux per photon, or non-finite).
+    pub clamped: u64,
+    /// Non-finite states caught.
+    pub nan_guards: u64,
+    /// Photons that landed on a receiver inside a medium.
+    pub landed_inside: u64,
+}
+
+impl ImageSpaceCounters {
+    /// From the counter words of a readback.
+    pub fn from_words(w: &[u32]) -> Self {
+        let c = |i: usize| w.get(i).copied().unwrap_or(0) as u64;
+        Self {
+            photons_emitted: c(0),
+            skipped_empty: c(1),
+            skipped_dim: c(2),
+            light_hits: c(3),
+            light_misses: c(4),
+            reprojection_plane: c(5),
+            reprojection_concave: c(6),
+            reprojection_convex: c(7),
+            camera_hits: c(8),
+            misses: c(9),
+            normal_rejects: c(10),
+            tir: c(11),
+            clamped: c(12),
+            nan_guards: c(13),
+            landed_inside: c(14),
+            direct_hits: c(15),
+        }
+    }
+}
+
 /// This frame's GPU and CPU time of every caustics pass that recorded one, appended to
 /// `samples` under `"{pass}@gpu"` / `"{pass}@cpu"`.
 fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut BTreeMap<String, Vec<f64>>) {
     for pass in std::iter::once(COMPOSITE_PASS)
         .chain(crate::render::aaps::passes::ALL_PASSES)
         .chain(crate::render::volume::passes::all_passes())
+        .chain(crate::render::image_space::passes::ALL_PASSES)
     {
         for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
             let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
@@ -565,6 +641,14 @@ fn drive(
                 }
             }
             o.report.frame_passes.push(frame);
+            if job.0.every_frame && job.0.technique != CausticsTechnique::Reference {
+                while let Some(snap) = readback.poll() {
+                    o.report.frame_caustics.push(snap.image);
+                }
+                if n + 1 < job.0.frames.max(4) {
+                    readback.request();
+                }
+            }
             if n + 1 >= job.0.frames.max(4) && !job.0.window {
                 if job.0.technique != CausticsTechnique::Reference {
                     readback.request();
@@ -597,13 +681,17 @@ fn drive(
         }
         Phase::Finishing(n) => {
             if job.0.technique != CausticsTechnique::Reference
-                && let Some(snap) = readback.poll()
                 && let Ok(mut o) = shared.0.lock()
             {
-                o.snapshot = Some(snap);
+                while let Some(snap) = readback.poll() {
+                    if job.0.every_frame {
+                        o.report.frame_caustics.push(snap.image.clone());
+                    }
+                    o.snapshot = Some(snap);
+                }
             }
             let waiting = job.0.technique != CausticsTechnique::Reference
-                && shared.0.lock().is_ok_and(|o| o.snapshot.is_none());
+                && (readback.pending() > 0 || shared.0.lock().is_ok_and(|o| o.snapshot.is_none()));
             if n < 4 || (waiting && n < 600) {
                 *phase = Phase::Finishing(n + 1);
                 return;
@@ -663,6 +751,7 @@ fn spawn_cameras(
     let transform = gt.compute_transform();
     let mut main = commands.spawn((
         job.aaps.clone(),
+        job.image_space.clone(),
         MainCamera,
         Camera3d::default(),
         Camera {
@@ -740,6 +829,14 @@ fn finish_report(
         let v = super::volume::VolumeCounters::from_words(&snap.counters);
         o.report.photons_traced = v.hits;
         o.report.volume = Some(v);
+        o.report.caustics = Some(snap.image);
+    } else if job.technique == CausticsTechnique::ImageSpace
+        && let Some(snap) = o.snapshot.take()
+    {
+        let c = ImageSpaceCounters::from_words(&snap.counters);
+        o.report.photons_traced = c.photons_emitted;
+        o.report.photons_in_view = c.camera_hits;
+        o.report.image_space = Some(c);
         o.report.caustics = Some(snap.image);
     } else if let Some(snap) = o.snapshot.take() {
         let c = AapsCounters::from_snapshot(&snap);

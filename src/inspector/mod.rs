@@ -412,6 +412,18 @@ fn pass_switches(world: &mut World, camera: Entity, ui: &mut egui::Ui) {
                 }
             }
         }
+        crate::CausticsTechnique::ImageSpace => {
+            let a = world
+                .get::<crate::ImageSpaceSettings>(camera)
+                .cloned()
+                .unwrap_or_default();
+            let mut denoise = a.denoise;
+            if ui.checkbox(&mut denoise, "image-space SVGF").changed() {
+                let mut a = a;
+                a.denoise = denoise;
+                world.entity_mut(camera).insert(a);
+            }
+        }
         crate::CausticsTechnique::Reference => {}
     }
 }

@@ -13,6 +13,7 @@
 mod aaps;
 mod footprint;
 mod fresnel;
+mod image_space;
 mod media;
 mod offset;
 mod sampling;
@@ -20,6 +21,7 @@ mod sampling;
 pub use aaps::*;
 pub use footprint::*;
 pub use fresnel::*;
+pub use image_space::*;
 pub use media::*;
 pub use offset::*;
 pub use sampling::*;

@@ -7,6 +7,7 @@
 
 pub mod aaps;
 pub mod composite;
+pub mod image_space;
 pub mod readback;
 pub mod volume;
 
@@ -24,7 +25,9 @@ use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::sync_component::SyncComponent;
 use bevy::render::{Render, RenderApp, RenderSystems};
 
-use crate::components::{AapsSettings, Caustics, CausticsDebugView, CausticsTechnique};
+use crate::components::{
+    AapsSettings, Caustics, CausticsDebugView, CausticsTechnique, ImageSpaceSettings,
+};
 use crate::reference::{CausticImage, CausticsReferenceImage};
 
 /// Format of the caustics buffer.
@@ -60,6 +63,8 @@ pub struct ExtractedCaustics {
     pub technique: CausticsTechnique,
     /// AAPS settings (the camera's [`AapsSettings`] or the defaults).
     pub aaps: AapsSettings,
+    /// Image-space settings (the camera's [`ImageSpaceSettings`] or the defaults).
+    pub image_space: ImageSpaceSettings,
     /// Photon budget per light (the quality preset).
     pub photons_per_light: u64,
     /// Composite as if albedo were 1.
@@ -79,15 +84,17 @@ impl ExtractComponent for Caustics {
         &'static Caustics,
         Option<&'static CausticsReferenceImage>,
         Option<&'static AapsSettings>,
+        Option<&'static ImageSpaceSettings>,
     );
     type QueryFilter = ();
     type Out = ExtractedCaustics;
 
     fn extract_component(
-        (c, reference, aaps): (
+        (c, reference, aaps, image_space): (
             &Caustics,
             Option<&CausticsReferenceImage>,
             Option<&AapsSettings>,
+            Option<&ImageSpaceSettings>,
         ),
     ) -> Option<Self::Out> {
         let reference = reference.map(|r| (r.image.clone(), r.serial));
@@ -99,6 +106,7 @@ impl ExtractComponent for Caustics {
         Some(ExtractedCaustics {
             technique: c.technique,
             aaps: aaps.cloned().unwrap_or_default(),
+            image_space: image_space.cloned().unwrap_or_default(),
             photons_per_light: c.quality.photons_per_light(),
             white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
             hidden: c.debug_view == CausticsDebugView::Hidden,
@@ -245,6 +253,7 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     composite::build(app);
     if aaps::build(app) {
         volume::build(app);
+        image_space::build(app);
     }
     readback::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {

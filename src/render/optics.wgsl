@@ -312,3 +312,78 @@ fn optics_budget_density(d_in: f32, contributing: bool, floor_d: f32, scale: f32
     out = max(out, f32(optics_floor_square(max(min_density, 1.0))));
     return select(16777216.0, min(out, 16777216.0), abs(out) <= 3.4028235e38);
 }
+
+// r2_point (src/optics/image_space.rs): R2 sequence in 0.32 fixed point, rotated.
+fn optics_r2_point(n: u32, rotation: vec2<u32>) -> vec2<f32> {
+    let x = n * 3242174889u + rotation.x;
+    let y = n * 2447445414u + rotation.y;
+    return vec2(f32(x >> 8u), f32(y >> 8u)) * (1.0 / 16777216.0);
+}
+
+// march_crossing (src/optics/image_space.rs): seed 003 eq. 2.
+fn optics_march_crossing(zr0: f32, zr1: f32, zs0: f32, zs1: f32) -> f32 {
+    let z = vec4(zr0, zr1, zs0, zs1);
+    if !(all(z == z) && all(abs(z) <= vec4(3.4e38))) {
+        return 1.0;
+    }
+    let den = (zr1 - zr0) - (zs1 - zs0);
+    let u = (zs0 - zr0) / den;
+    if u == u && abs(u) <= 3.0e38 {
+        return clamp(u, 0.0, 1.0);
+    }
+    return 1.0;
+}
+
+// classify_reprojection (src/optics/image_space.rs): 0 plane, 1 concave, 2 convex.
+fn optics_classify_reprojection(z_ray: f32, z_scene: f32, thickness: f32) -> u32 {
+    let finite = z_ray == z_ray && z_scene == z_scene && abs(z_ray) <= 3.4e38 && abs(z_scene) <= 3.4e38;
+    if !finite {
+        return 1u;
+    }
+    let tol = max(thickness, 0.0) * abs(z_scene);
+    if abs(z_ray - z_scene) <= tol {
+        return 0u;
+    }
+    return select(2u, 1u, z_ray < z_scene);
+}
+
+// photon_flux_scale (src/optics/image_space.rs).
+fn optics_photon_flux_scale(texels: f32, samples: f32) -> f32 {
+    if samples >= 1.0 && abs(texels) <= 3.4e38 && samples <= 3.4e38 {
+        return texels / samples;
+    }
+    return 0.0;
+}
+
+// fixed_point_word (src/optics/image_space.rs): x = word, y = 1 when clamped.
+fn optics_fixed_point_word(e: f32, scale: f32, u: f32) -> vec2<u32> {
+    if !(e == e && e >= 0.0 && e <= 3.4e38) {
+        return vec2(0u, select(1u, 0u, e == 0.0));
+    }
+    let v = floor(e * scale + clamp(u, 0.0, 1.0));
+    if v >= 4294967040.0 {
+        return vec2(4294967040u, 1u);
+    }
+    return vec2(u32(v), 0u);
+}
+
+// svgf_weight (src/optics/image_space.rs): SVGF's edge-stopping weight.
+fn optics_svgf_weight(dz: f32, dz_scaled: f32, n_dot: f32, sigma_n: f32, dl: f32, l_sigma: f32) -> f32 {
+    let wz = abs(dz) / (abs(dz_scaled) + 1.0e-6);
+    let wl = abs(dl) / (abs(l_sigma) + 1.0e-6);
+    let wn = pow(clamp(n_dot, 0.0, 1.0), max(sigma_n, 0.0));
+    let w = exp(-(wz + wl)) * wn;
+    return select(0.0, w, w == w && w <= 3.4e38);
+}
+
+// pixel_footprint_area (src/optics/footprint.rs): A_p = cos^3(alpha) d^2 / (f_x f_y cos θ_s).
+fn optics_pixel_footprint_area(distance: f32, cos_alpha: f32, cos_surface: f32, focal: vec2<f32>) -> f32 {
+    if !(distance > 0.0) || distance > 3.4e38 {
+        return 0.0;
+    }
+    let ca = min(abs(cos_alpha), 1.0);
+    let omega = ca * ca * ca / (max(focal.x, 1.0e-6) * max(focal.y, 1.0e-6));
+    let cs = clamp(abs(cos_surface), 1.0e-4, 1.0);
+    let a = omega * distance * distance / cs;
+    return select(3.4028235e38, a, a <= 3.4e38);
+}

@@ -15,6 +15,7 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
 use super::aaps::view::{AapsViewState, SPLAT_GUARD_SPLATS};
+use super::image_space::view::ImageSpaceViewState;
 use super::volume::gpu::CNT;
 use super::volume::view::{VolumeStore, VolumeViewState};
 use super::{ExtractedCaustics, ViewCausticsBuffer};
@@ -29,7 +30,8 @@ pub const GUARD_WORDS: usize = (1 + SPLAT_GUARD_SPLATS as usize) * 16;
 #[derive(Default)]
 struct State {
     requested: bool,
-    pending: Option<(Buffer, UVec2, u32, Arc<AtomicBool>)>,
+    /// Copies in flight, oldest first (one per requested frame).
+    pending: std::collections::VecDeque<(Buffer, UVec2, u32, Arc<AtomicBool>)>,
 }
 
 /// A readback result.
@@ -50,24 +52,32 @@ pub struct CausticsSnapshot {
 pub struct CausticsReadback(Arc<Mutex<State>>);
 
 impl CausticsReadback {
-    /// Ask for the next frame's caustics buffer of the (first) caustics view.
+    /// Ask for the next frame's caustics buffer of the (first) caustics view (asking every
+    /// frame gives every frame's, in order).
     pub fn request(&self) {
         if let Ok(mut s) = self.0.lock() {
             s.requested = true;
         }
     }
 
-    /// The snapshot, once the GPU has delivered it.
+    /// Readbacks requested or in flight and not yet polled.
+    pub fn pending(&self) -> usize {
+        self.0
+            .lock()
+            .map_or(0, |s| s.pending.len() + s.requested as usize)
+    }
+
+    /// The oldest snapshot not yet polled, once the GPU has delivered it.
     pub fn poll(&self) -> Option<CausticsSnapshot> {
         let mut s = self.0.lock().ok()?;
-        let (buffer, size, row, ready) = s.pending.as_ref()?;
+        let (_, _, _, ready) = s.pending.front()?;
         if !ready.load(Ordering::Acquire) {
             return None;
         }
-        let (w, h, row) = (size.x as usize, size.y as usize, *row as usize);
+        let (buffer, size, row, _) = s.pending.pop_front()?;
+        let (w, h, row) = (size.x as usize, size.y as usize, row as usize);
         let data = buffer.slice(..).get_mapped_range().to_vec();
         buffer.unmap();
-        s.pending = None;
         let f = |i: usize| f32::from_le_bytes(data[i..i + 4].try_into().unwrap());
         let mut image = CausticImage::new(w as u32, h as u32);
         for y in 0..h {
@@ -90,22 +100,24 @@ impl CausticsReadback {
     }
 }
 
+#[allow(clippy::type_complexity)]
 fn copy_for_readback(
     view: ViewQuery<(
         &ViewCausticsBuffer,
         &ExtractedCaustics,
         Option<&AapsViewState>,
         Option<&VolumeViewState>,
+        Option<&ImageSpaceViewState>,
     )>,
     volumes: Option<Res<VolumeStore>>,
     readback: Res<CausticsReadback>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, _, aaps, volume) = view.into_inner();
+    let (buffer, _, aaps, volume, image_space) = view.into_inner();
     let Ok(mut s) = readback.0.lock() else {
         return;
     };
-    if !s.requested || s.pending.is_some() {
+    if !s.requested {
         return;
     }
     s.requested = false;
@@ -167,6 +179,15 @@ fn copy_for_readback(
             Some((COUNTER_WORDS * 4) as u64),
         );
     }
+    if let Some(state) = image_space {
+        encoder.copy_buffer_to_buffer(
+            &state.counters,
+            0,
+            &staging,
+            image_bytes,
+            Some((COUNTER_WORDS * 4) as u64),
+        );
+    }
     let ready = Arc::new(AtomicBool::new(false));
     let flag = ready.clone();
     encoder.map_buffer_on_submit(&staging, MapMode::Read, .., move |r| {
@@ -174,7 +195,7 @@ fn copy_for_readback(
             flag.store(true, Ordering::Release);
         }
     });
-    s.pending = Some((staging, buffer.size, row, ready));
+    s.pending.push_back((staging, buffer.size, row, ready));
 }
 
 pub(super) fn build(app: &mut App) {

@@ -27,6 +27,7 @@ use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderStartup, RenderSy
 use bevy::shader::Shader;
 
 use super::aaps::view::AapsFrame;
+use super::image_space::view::ImageSpaceFrame;
 use super::volume::view::VolumeViewFrame;
 use super::{CausticsDispatchLog, ExtractedCaustics, ViewCausticsBuffer};
 use crate::components::CausticsTechnique;
@@ -129,13 +130,15 @@ pub fn composite_caustics(
         &CompositePipelineId,
         Option<&AapsFrame>,
         Option<&VolumeViewFrame>,
+        Option<&ImageSpaceFrame>,
     )>,
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,
     log: Res<CausticsDispatchLog>,
     mut ctx: RenderContext,
 ) {
-    let (target, prepass, buffer, camera, caustics, id, aaps, volume) = view.into_inner();
+    let (target, prepass, buffer, camera, caustics, id, aaps, volume, image_space) =
+        view.into_inner();
     let (Some(render_pipeline), Some(gbuffer)) =
         (cache.get_render_pipeline(**id), prepass.deferred_view())
     else {
@@ -148,6 +151,8 @@ pub fn composite_caustics(
         CausticsTechnique::Aaps => aaps.is_some(),
         // Volumes fill it this frame, or none is visible.
         CausticsTechnique::Volume => volume.is_some(),
+        // Image-space tracing fills it this frame, or no light reaches a caster.
+        CausticsTechnique::ImageSpace => image_space.is_some(),
     };
     if !filled || caustics.hidden {
         return;

@@ -1,0 +1,88 @@
+//! The `ImageSpace` technique (seed 003, cascaded image-space photon tracing, Meenrattanakorn
+//! and Lambers 2022) on the GPU: no BVH, no volume, only rasterised views.
+//!
+//! Per frame and view (see [`passes`]):
+//! 1. **Reflective shadow maps** per caustic light, rasterised by the plugin from the scene's
+//!    world-space triangles (Bevy's shadow pass is depth only): an opaque layer (receivers),
+//!    a caster-front layer (depth, normal, instance → material) and a **caster-back layer**
+//!    (the nearest caster surface facing away from the light), so a photon refracted into a
+//!    closed glass object leaves it through a second refraction. Directional lights get an
+//!    orthographic map fitted to the casters; point and spot lights the cone holding the
+//!    casters' bounding sphere.
+//! 2. **Photons** at R2 low-discrepancy points over the map, rotated every frame; flux =
+//!    texel flux × texels / photons; reflect or refract by the exact Fresnel factor against a
+//!    uniform number (Russian roulette, flux unchanged); at the back face the transmitted
+//!    share `1 − F` is kept and total internal reflection drops the photon (counted); Beer-Lambert
+//!    inside media.
+//! 3. **Cascaded march**: a perspective-correct DDA through the light's opaque depth, the exact
+//!    termination of eq. 2, the end reprojected into the camera (plane: a hit; concave: march
+//!    on; convex: lost), a second-chance march in the camera's depth, the normal test
+//!    `<−d, n> ≥ 0`. Every outcome is counted.
+//! 4. **Irradiance** `E = Φ / A_p` with the exact pixel footprint, added into a per-pixel
+//!    photon map in 64-bit fixed point (1/256 lux, stochastic rounding: integer sums, so the
+//!    map is the same whatever order the photons land in).
+//! 5. **SVGF** into the caustics buffer, the history dropped when the scene's caustics change.
+//!
+//! Readings of the paper we chose (each in the doc of the code that implements it):
+//! - Casters are invisible to the marches (the opaque layers hold receivers only), as the
+//!   paper's opaque-only depth buffers hold no refractive surface; mirrors are casters too.
+//! - Footprint: the paper's on-axis `A_p` times `<−d, n>` is replaced by the exact off-axis
+//!   footprint (`optics::pixel_footprint_area`), which keeps the corners' energy.
+//! - The luminance cutoff is relative to the light's brightest texel.
+//! - Reprojection uses the camera's previous `clip_from_world` (exact for still receivers;
+//!   moving receivers fail the depth and normal tests and restart their history), not the
+//!   motion-vector prepass, which the plugin does not otherwise need.
+//! - Casters are ideal specular ([`crate::CausticMaterial`] has no roughness; a
+//!   `StandardMaterial` mirror rougher than 0.2 is already a receiver), so the paper's
+//!   roughness cutoff of 0.3 never applies.
+
+pub mod passes;
+pub mod pipelines;
+pub mod view;
+
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::pbr::deferred::deferred_lighting;
+use bevy::prelude::*;
+use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::shader::Shader;
+
+/// Render-app part; called from [`crate::render::build`] when AAPS (whose scene extraction it
+/// shares) is available.
+pub(crate) fn build(app: &mut App) {
+    let shaders = {
+        let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
+        pipelines::ImageSpaceShaders {
+            compute: shaders.add(Shader::from_wgsl(
+                pipelines::compute_source(),
+                "bevy_caustics/image_space_compute.wgsl",
+            )),
+            rsm: shaders.add(Shader::from_wgsl(
+                pipelines::rsm_source(),
+                "bevy_caustics/image_space_rsm.wgsl",
+            )),
+        }
+    };
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app
+        .insert_resource(shaders)
+        .add_systems(RenderStartup, pipelines::init_image_space_pipelines)
+        .add_systems(
+            Render,
+            (
+                view::prepare_image_space_scene,
+                view::prepare_image_space_views,
+            )
+                .chain()
+                .in_set(RenderSystems::PrepareResources)
+                .after(super::prepare_caustics_buffers),
+        )
+        .add_systems(
+            Core3d,
+            passes::image_space_passes
+                .in_set(Core3dSystems::MainPass)
+                .after(deferred_lighting)
+                .before(super::composite::composite_caustics),
+        );
+}

@@ -1,0 +1,149 @@
+//! The image-space pipelines (created in `RenderStartup`): the RSM raster module (three
+//! layers) and the compute module (`trace`, `resolve`, and SVGF's `temporal`, `variance`,
+//! `atrous`), all compute passes on one bind-group layout.
+
+use bevy::prelude::*;
+use bevy::render::render_resource::{
+    BindGroupLayoutDescriptor, BindGroupLayoutEntries, CachedComputePipelineId,
+    CachedRenderPipelineId, ColorTargetState, ColorWrites, CompareFunction,
+    ComputePipelineDescriptor, DepthStencilState, FragmentState, PipelineCache,
+    RenderPipelineDescriptor, ShaderStages, StorageTextureAccess, TextureFormat, TextureSampleType,
+    VertexState, binding_types,
+};
+use bevy::shader::Shader;
+
+/// Format of the RSM layers: view depth along the light's axis, normal x, y, ±(instance + 1).
+pub const RSM_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
+/// Depth attachment of the RSM passes.
+pub const RSM_DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
+/// Format of the denoiser's textures.
+pub const SVGF_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
+
+/// WGSL of the compute module.
+pub fn compute_source() -> String {
+    [
+        include_str!("../optics.wgsl"),
+        include_str!("trace.wgsl"),
+        include_str!("svgf.wgsl"),
+    ]
+    .join("\n")
+}
+
+/// WGSL of the RSM raster module.
+pub fn rsm_source() -> String {
+    [include_str!("../optics.wgsl"), include_str!("rsm.wgsl")].join("\n")
+}
+
+/// Shader handles, added to `Assets<Shader>` by the plugin.
+#[derive(Resource, Clone)]
+pub struct ImageSpaceShaders {
+    /// Compute module.
+    pub compute: Handle<Shader>,
+    /// RSM raster module.
+    pub rsm: Handle<Shader>,
+}
+
+/// The compute entry points, in [`ImageSpacePipelines::compute`] order.
+pub const COMPUTE_ENTRIES: [&str; 5] = ["trace", "resolve", "temporal", "variance", "atrous"];
+
+/// Layouts and pipeline ids.
+#[derive(Resource)]
+pub struct ImageSpacePipelines {
+    /// Group 0 of every compute pass.
+    pub compute_layout: BindGroupLayoutDescriptor,
+    /// Group 0 of the RSM passes.
+    pub rsm_layout: BindGroupLayoutDescriptor,
+    /// [`COMPUTE_ENTRIES`].
+    pub compute: [CachedComputePipelineId; 5],
+    /// Opaque, caster-front and caster-back RSM layers.
+    pub rsm: [CachedRenderPipelineId; 3],
+}
+
+pub(super) fn init_image_space_pipelines(
+    mut commands: Commands,
+    shaders: Res<ImageSpaceShaders>,
+    cache: Res<PipelineCache>,
+) {
+    use binding_types::*;
+    let tex = || texture_2d(TextureSampleType::Float { filterable: false });
+    let out = || texture_storage_2d(SVGF_FORMAT, StorageTextureAccess::WriteOnly);
+    let compute_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:image_space",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer_sized(false, None),
+                uniform_buffer_sized(true, None),
+                texture_2d_array(TextureSampleType::Float { filterable: false }),
+                texture_depth_2d(),
+                texture_2d(TextureSampleType::Uint),
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                tex(),
+                tex(),
+                tex(),
+                tex(),
+                out(),
+                out(),
+                out(),
+                uniform_buffer_sized(true, None),
+            ),
+        ),
+    );
+    let rsm_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:image_space_rsm",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::VERTEX_FRAGMENT,
+            (
+                uniform_buffer_sized(true, None),
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
+            ),
+        ),
+    );
+    let compute = COMPUTE_ENTRIES.map(|entry| {
+        cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some(format!("caustics:pipeline:image_space_{entry}").into()),
+            layout: vec![compute_layout.clone()],
+            shader: shaders.compute.clone(),
+            entry_point: Some(entry.into()),
+            ..default()
+        })
+    });
+    let rsm = ["fs_opaque", "fs_front", "fs_back"].map(|entry| {
+        cache.queue_render_pipeline(RenderPipelineDescriptor {
+            label: Some(format!("caustics:pipeline:image_space_rsm_{entry}").into()),
+            layout: vec![rsm_layout.clone()],
+            vertex: VertexState {
+                shader: shaders.rsm.clone(),
+                entry_point: Some("vs_rsm".into()),
+                ..default()
+            },
+            fragment: Some(FragmentState {
+                shader: shaders.rsm.clone(),
+                entry_point: Some(entry.into()),
+                targets: vec![Some(ColorTargetState {
+                    format: RSM_FORMAT,
+                    blend: None,
+                    write_mask: ColorWrites::ALL,
+                })],
+                ..default()
+            }),
+            depth_stencil: Some(DepthStencilState {
+                format: RSM_DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(CompareFunction::Less),
+                stencil: default(),
+                bias: default(),
+            }),
+            ..default()
+        })
+    });
+    commands.insert_resource(ImageSpacePipelines {
+        compute_layout,
+        rsm_layout,
+        compute,
+        rsm,
+    });
+}

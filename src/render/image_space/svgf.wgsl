@@ -1,0 +1,216 @@
+// SVGF (Schied et al. 2017) over the photon map, as section 3.3 of seed 003 uses it:
+// `temporal` reprojects last frame's history with the camera's previous clip_from_world (a
+// 2x2 bilinear tap, each tap tested for depth and normal; none valid is a disocclusion),
+// blends colour and luminance moments with max(alpha, 1 / history); `variance` turns the
+// moments into a variance (a 7x7 bilateral estimate while the history is under 4 frames);
+// `atrous` is one 5x5 B3 à-trous iteration with depth, normal and luminance edge stopping
+// (optics_svgf_weight) on a 3x3-prefiltered variance. Irradiance in lux throughout: no
+// albedo to demodulate, no clamp to [0, 1]. Appended to trace.wgsl (same bindings).
+
+fn lum(c: vec3<f32>) -> f32 {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+fn view_size() -> vec2<i32> {
+    return vec2<i32>(params.camera.size.xy);
+}
+
+fn in_view(q: vec2<i32>) -> bool {
+    return all(q >= vec2(0)) && all(q < view_size());
+}
+
+fn clean(c: vec4<f32>) -> vec4<f32> {
+    return select(vec4(0.0), c, all(c == c) && all(abs(c) <= vec4(3.0e38)));
+}
+
+@compute @workgroup_size(8, 8)
+fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = vec2<i32>(gid.xy);
+    if !in_view(p) {
+        return;
+    }
+    let raw = clean(textureLoad(src_a, p, 0)).rgb;
+    let z = camera_depth(p);
+    let n = gbuffer_normal(p);
+    if z <= 0.0 || n.w == 0.0 {
+        textureStore(out_a, p, vec4(0.0));
+        textureStore(out_b, p, vec4(0.0));
+        return;
+    }
+    var hist = vec3(0.0);
+    var moments = vec2(0.0);
+    var h = 0.0;
+    if (params.frame.w & FLAG_RESET) == 0u {
+        let x = unproject(params.camera, vec2<f32>(p) + 0.5, z);
+        let c = params.prev_clip_from_world * vec4(x, 1.0);
+        if c.w > 0.0 {
+            let pp = ndc_to_px(c.xy / c.w, params.camera.size.xy) - 0.5;
+            let base = vec2<i32>(floor(pp));
+            let f = pp - floor(pp);
+            var wsum = 0.0;
+            for (var k = 0; k < 4; k += 1) {
+                let o = vec2(k & 1, k >> 1);
+                let q = base + o;
+                if !in_view(q) {
+                    continue;
+                }
+                let zn = textureLoad(src_d, q, 0);
+                // Depth within 5 % of the expected previous depth (c.w is the view depth of
+                // a perspective camera), normals within 25 degrees.
+                if zn.x <= 0.0 || abs(zn.x - c.w) > 0.05 * c.w || dot(zn.yzw, n.xyz) < 0.9 {
+                    continue;
+                }
+                let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1);
+                let hc = clean(textureLoad(src_b, q, 0));
+                let hm = clean(textureLoad(src_c, q, 0));
+                hist += w * hc.rgb;
+                moments += w * hm.xy;
+                h += w * hm.z;
+                wsum += w;
+            }
+            if wsum > 1.0e-4 {
+                hist /= wsum;
+                moments /= wsum;
+                h = floor(h / wsum + 0.5);
+            } else {
+                h = 0.0;
+            }
+        }
+    }
+    h = min(h + 1.0, params.svgf.z);
+    let a = max(params.svgf.x, 1.0 / h);
+    let am = max(params.svgf.y, 1.0 / h);
+    let l = lum(raw);
+    let col = mix(hist, raw, a);
+    let m = mix(moments, vec2(l, l * l), am);
+    textureStore(out_a, p, vec4(col, h));
+    textureStore(out_b, p, vec4(m, h, 0.0));
+}
+
+// Writes the filtered (colour, variance) of the last pass: into the caustics buffer (alpha 0)
+// when FLAG_LAST, else into the next ping-pong texture; the colour history when FLAG_HISTORY.
+fn filter_out(p: vec2<i32>, c: vec3<f32>, var_: f32) {
+    let v = vec4(c, max(var_, 0.0));
+    if (pass_step.y & FLAG_LAST) != 0u {
+        textureStore(out_a, p, vec4(c, 0.0));
+    } else {
+        textureStore(out_a, p, v);
+    }
+    if (pass_step.y & FLAG_HISTORY) != 0u {
+        textureStore(out_b, p, vec4(c, textureLoad(src_c, p, 0).z));
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn variance(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = vec2<i32>(gid.xy);
+    if !in_view(p) {
+        return;
+    }
+    let acc = textureLoad(src_a, p, 0);
+    let mom = textureLoad(src_c, p, 0);
+    let zn = textureLoad(src_d, p, 0);
+    if zn.x <= 0.0 {
+        filter_out(p, vec3(0.0), 0.0);
+        return;
+    }
+    if mom.z >= 4.0 {
+        filter_out(p, acc.rgb, mom.y - mom.x * mom.x);
+        return;
+    }
+    // Short history: a 7x7 bilateral estimate of the moments (depth and normal only).
+    var c = vec3(0.0);
+    var m = vec2(0.0);
+    var wsum = 0.0;
+    for (var dy = -3; dy <= 3; dy += 1) {
+        for (var dx = -3; dx <= 3; dx += 1) {
+            let q = p + vec2(dx, dy);
+            if !in_view(q) {
+                continue;
+            }
+            let zq = textureLoad(src_d, q, 0);
+            if zq.x <= 0.0 {
+                continue;
+            }
+            let dz = abs(zq.x - zn.x) / (params.svgf.w * 0.02 * zn.x * length(vec2(f32(dx), f32(dy))) + 1.0e-6);
+            let w = exp(-dz) * pow(clamp(dot(zq.yzw, zn.yzw), 0.0, 1.0), params.svgf2.x);
+            if !(w > 0.0) {
+                continue;
+            }
+            c += w * clean(textureLoad(src_a, q, 0)).rgb;
+            m += w * clean(textureLoad(src_c, q, 0)).xy;
+            wsum += w;
+        }
+    }
+    if !(wsum > 0.0) {
+        filter_out(p, acc.rgb, 0.0);
+        return;
+    }
+    // The colour stays this pixel's: the bilateral estimate is for the variance only (a 7x7
+    // mean of a sparse photon map would spread a focus that the variance-guided à-trous keeps).
+    c = acc.rgb;
+    m /= wsum;
+    // Falcor raises this by 4 / h; on sparse photon maps that spreads a fresh caustic over
+    // the whole à-trous footprint after every reset, so the spatial estimate is kept as is.
+    filter_out(p, c, m.y - m.x * m.x);
+}
+
+@compute @workgroup_size(8, 8)
+fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = vec2<i32>(gid.xy);
+    if !in_view(p) {
+        return;
+    }
+    let zn = textureLoad(src_d, p, 0);
+    let centre = clean(textureLoad(src_a, p, 0));
+    if zn.x <= 0.0 {
+        filter_out(p, vec3(0.0), 0.0);
+        return;
+    }
+    // 3x3 Gaussian of the variance (1/4 centre, 1/8 edges, 1/16 corners).
+    var v = 0.0;
+    for (var dy = -1; dy <= 1; dy += 1) {
+        for (var dx = -1; dx <= 1; dx += 1) {
+            let q = clamp(p + vec2(dx, dy), vec2(0), view_size() - 1);
+            let k = select(0.5, 1.0, dx == 0) * select(0.5, 1.0, dy == 0) * 0.25;
+            v += k * clean(textureLoad(src_a, q, 0)).w;
+        }
+    }
+    let l_sigma = params.svgf2.y * sqrt(max(v, 0.0));
+    // Screen-space depth gradient (central differences, clamped at the border).
+    let zx = textureLoad(src_d, clamp(p + vec2(1, 0), vec2(0), view_size() - 1), 0).x
+        - textureLoad(src_d, clamp(p - vec2(1, 0), vec2(0), view_size() - 1), 0).x;
+    let zy = textureLoad(src_d, clamp(p + vec2(0, 1), vec2(0), view_size() - 1), 0).x
+        - textureLoad(src_d, clamp(p - vec2(0, 1), vec2(0), view_size() - 1), 0).x;
+    let grad = vec2(zx, zy) * 0.5;
+    let s = i32(pass_step.x);
+    let b3 = array<f32, 3>(0.375, 0.25, 0.0625);
+    let lp = lum(centre.rgb);
+    var sum = centre.rgb;
+    var sum_v = centre.w;
+    var wsum = 1.0;
+    for (var dy = -2; dy <= 2; dy += 1) {
+        for (var dx = -2; dx <= 2; dx += 1) {
+            if dx == 0 && dy == 0 {
+                continue;
+            }
+            let q = p + vec2(dx, dy) * s;
+            if !in_view(q) {
+                continue;
+            }
+            let zq = textureLoad(src_d, q, 0);
+            if zq.x <= 0.0 {
+                continue;
+            }
+            let cq = clean(textureLoad(src_a, q, 0));
+            let off = vec2(f32(dx), f32(dy)) * f32(s);
+            let dz_scaled = params.svgf.w * max(abs(dot(grad, off)), 1.0e-3 * zn.x);
+            let h = b3[abs(dx)] * b3[abs(dy)] / (b3[0] * b3[0]);
+            let w = h * optics_svgf_weight(zq.x - zn.x, dz_scaled, dot(zq.yzw, zn.yzw), params.svgf2.x, lum(cq.rgb) - lp, l_sigma);
+            sum += w * cq.rgb;
+            sum_v += w * w * cq.w;
+            wsum += w;
+        }
+    }
+    filter_out(p, sum / wsum, sum_v / (wsum * wsum));
+}

@@ -1,0 +1,468 @@
+// Cascaded image-space photon tracing (seed 003 sections 3.1 to 3.3): `trace` starts photons
+// at R2 sample points of a light's caster-front RSM layer, reflects or refracts them
+// (Fresnel as a probability, Beer-Lambert inside media, a second refraction at the
+// caster-back layer), marches them through the light's opaque depth, reprojects the end into
+// the camera (plane / concave / convex), marches on in the camera's depth, tests the normal
+// and adds E = Φ / A_p (the exact pixel footprint) to the photon map in 64-bit fixed point.
+// `resolve` turns the photon map into irradiance (lux) and clears it, and stores the view's
+// depth and normal for the denoiser. Concatenated after optics.wgsl by pipelines.rs.
+
+struct SpaceView {
+    clip_from_view: mat4x4<f32>,
+    view_from_clip: mat4x4<f32>,
+    view_from_world: mat4x4<f32>,
+    world_from_view: mat4x4<f32>,
+    size: vec4<f32>,  // width, height (pixels or texels), f_x, f_y (pixels)
+    eye: vec4<f32>,   // xyz eye (orthographic: the view's origin), w: near distance, 0 orthographic
+}
+
+struct IsParams {
+    camera: SpaceView,
+    prev_clip_from_world: mat4x4<f32>,
+    frame: vec4<u32>,   // frame, rotation x, rotation y, flags (FLAG_*)
+    knobs: vec4<f32>,   // thickness, luminance cutoff, scene scale (m), stride (texels)
+    svgf: vec4<f32>,    // alpha colour, alpha moments, history cap, sigma_z
+    svgf2: vec4<f32>,   // sigma_n, sigma_l, 0, 0
+}
+
+struct IsLight {
+    view: SpaceView,
+    flux: vec4<f32>,    // rgb: photon flux before the texel's cos^3 and spot factors; w: photons
+    spot: vec4<f32>,    // xyz spot axis, w: cos inner
+    misc: vec4<f32>,    // cos outer, kind (0 dir, 1 point, 2 spot), RSM side, first layer
+}
+
+const FLAG_DENOISE: u32 = 1u;
+const FLAG_RESET: u32 = 2u;
+const FLAG_HISTORY: u32 = 4u;   // the pass writes the colour history (step uniform)
+const FLAG_LAST: u32 = 8u;      // the pass writes the caustics buffer (step uniform)
+
+@group(0) @binding(0) var<uniform> params: IsParams;
+@group(0) @binding(1) var<uniform> light: IsLight;
+@group(0) @binding(2) var rsm: texture_2d_array<f32>;
+@group(0) @binding(3) var view_depth: texture_depth_2d;
+@group(0) @binding(4) var gbuffer: texture_2d<u32>;
+@group(0) @binding(5) var<storage, read> mats: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> map: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(8) var src_a: texture_2d<f32>;
+@group(0) @binding(9) var src_b: texture_2d<f32>;
+@group(0) @binding(10) var src_c: texture_2d<f32>;
+@group(0) @binding(11) var src_d: texture_2d<f32>;
+@group(0) @binding(12) var out_a: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(13) var out_b: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(14) var out_c: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(15) var<uniform> pass_step: vec4<u32>;  // step (px), flags (FLAG_*), iteration, 0
+
+// Counter words (`IMAGE_SPACE_COUNTERS` in src/render/image_space/passes.rs).
+const C_EMITTED: u32 = 0u;      // samples on a caster texel, traced
+const C_EMPTY: u32 = 1u;        // samples on a texel without a caster
+const C_DIM: u32 = 2u;          // samples under the luminance cutoff
+const C_LIGHT_HITS: u32 = 3u;   // light-space marches that ended on a receiver
+const C_LIGHT_MISSES: u32 = 4u; // light-space marches that left the map
+const C_PLANE: u32 = 5u;
+const C_CONCAVE: u32 = 6u;
+const C_CONVEX: u32 = 7u;
+const C_CAMERA_HITS: u32 = 8u;  // photons deposited
+const C_MISSES: u32 = 9u;       // photons lost: off screen or no surface found
+const C_NORMAL: u32 = 10u;      // normal-test rejects
+const C_TIR: u32 = 11u;         // total internal reflection at the back face (dropped)
+const C_CLAMPED: u32 = 12u;     // fixed-point words clamped
+const C_NAN: u32 = 13u;         // non-finite states caught
+const C_INSIDE: u32 = 14u;      // photons that landed inside a medium (no back face on the way)
+const C_CAMERA_DIRECT: u32 = 15u; // deposits straight from the light march (plane case)
+
+const FIXED_SCALE: f32 = 256.0;  // FIXED_POINT_SCALE in src/optics/image_space.rs
+
+fn finite3(v: vec3<f32>) -> bool {
+    return all(v == v) && all(abs(v) <= vec3(3.0e38));
+}
+
+// Pixel (x right, y down) of an NDC point.
+fn ndc_to_px(ndc: vec2<f32>, size: vec2<f32>) -> vec2<f32> {
+    return vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * size;
+}
+
+fn px_to_ndc(px: vec2<f32>, size: vec2<f32>) -> vec2<f32> {
+    let uv = px / size;
+    return vec2(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+}
+
+// The world point of view v at pixel `px` and view depth `z` (> 0).
+fn unproject(v: SpaceView, px: vec2<f32>, z: f32) -> vec3<f32> {
+    let ndc = px_to_ndc(px, v.size.xy);
+    // Two finite depths for orthographic, perspective and infinite reverse-Z projections.
+    let a = v.view_from_clip * vec4(ndc, 0.5, 1.0);
+    let b = v.view_from_clip * vec4(ndc, 1.0, 1.0);
+    let pa = a.xyz / a.w;
+    let pb = b.xyz / b.w;
+    let s = (-z - pa.z) / (pb.z - pa.z);
+    let pv = mix(pa, pb, s);
+    return (v.world_from_view * vec4(pv, 1.0)).xyz;
+}
+
+// The camera's view depth at pixel p (-1 where nothing was drawn).
+fn camera_depth(p: vec2<i32>) -> f32 {
+    let d = textureLoad(view_depth, p, 0);
+    if !(d > 0.0) {
+        return -1.0;
+    }
+    let ndc = px_to_ndc(vec2<f32>(p) + 0.5, params.camera.size.xy);
+    let v = params.camera.view_from_clip * vec4(ndc, d, 1.0);
+    let z = -v.z / v.w;
+    return select(-1.0, z, z > 0.0 && z <= 3.0e38);
+}
+
+fn gbuffer_normal(p: vec2<i32>) -> vec4<f32> {
+    let g = textureLoad(gbuffer, p, 0);
+    if all(g == vec4<u32>(0u)) {
+        return vec4(0.0);
+    }
+    let a = g.a & 0xFFFFFFu;
+    let v = vec2(f32(a & 0xFFFu), f32((a >> 12u) & 0xFFFu)) / 4095.0 * 2.0 - 1.0;
+    var n = vec3(v, 1.0 - abs(v.x) - abs(v.y));
+    let t = clamp(-n.z, 0.0, 1.0);
+    n = vec3(n.xy + select(vec2(t), vec2(-t), n.xy >= vec2(0.0)), n.z);
+    return vec4(normalize(n), 1.0);
+}
+
+fn rsm_normal(t: vec4<f32>) -> vec3<f32> {
+    let z = sqrt(max(1.0 - t.y * t.y - t.z * t.z, 0.0));
+    return normalize(vec3(t.y, t.z, select(-z, z, t.w > 0.0)));
+}
+
+// Depth of the surface under pixel p in a march: mode 0 the camera; 1 the light's opaque
+// layer; 2 the light's caster-back layer. -1 where there is none.
+fn scene_depth(mode: u32, p: vec2<i32>) -> f32 {
+    if mode == 0u {
+        return camera_depth(p);
+    }
+    let layer = i32(light.misc.w) + select(0, 2, mode == 2u);
+    let t = textureLoad(rsm, p, layer, 0);
+    return select(-1.0, t.x, t.w != 0.0);
+}
+
+struct MarchResult {
+    hit: bool,
+    pos: vec3<f32>,   // the crossing (hit) or the last point inside the view (miss)
+    px: vec2<i32>,
+    inside: bool,     // the start was inside the view
+}
+
+// Perspective-correct DDA (McGuire and Mara 2014) from o along d (unit, world) for at most
+// `t_max` metres through view v's depth (mode, see scene_depth): 1/w, P/w and the pixel
+// position are linear along the projected segment, which is clipped to the near plane and
+// the viewport; steps of `stride` pixels; a step ending behind a surface by less than
+// `thickness` of its depth is a crossing, refined by eq. 2 (optics_march_crossing).
+fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max_in: f32) -> MarchResult {
+    var r: MarchResult;
+    r.hit = false;
+    r.pos = o;
+    r.px = vec2(-1);
+    r.inside = false;
+    let size = v.size.xy;
+    let p0 = (v.view_from_world * vec4(o, 1.0)).xyz;
+    let dv = (v.view_from_world * vec4(d, 0.0)).xyz;
+    var t_max = t_max_in;
+    let near = v.eye.w;
+    if near > 0.0 {
+        if -p0.z < near {
+            return r;
+        }
+        // Clip to the near plane.
+        if dv.z > 0.0 {
+            t_max = min(t_max, (-near - p0.z) / dv.z * 0.999);
+        }
+    }
+    let p1 = p0 + dv * t_max;
+    let h0 = v.clip_from_view * vec4(p0, 1.0);
+    let h1 = v.clip_from_view * vec4(p1, 1.0);
+    let k0 = 1.0 / h0.w;
+    let k1 = 1.0 / h1.w;
+    let s0 = ndc_to_px(h0.xy * k0, size);
+    let s1 = ndc_to_px(h1.xy * k1, size);
+    if !(all(s0 == s0) && all(s1 == s1) && k0 > 0.0 && k1 > 0.0) {
+        return r;
+    }
+    // Liang-Barsky: the part of [0, 1] whose pixel stays inside [0, size).
+    var a = 0.0;
+    var b = 1.0;
+    let ds = s1 - s0;
+    let hi = size - vec2(1.0e-3);
+    for (var i = 0; i < 2; i += 1) {
+        if abs(ds[i]) < 1.0e-12 {
+            if s0[i] < 0.0 || s0[i] > hi[i] {
+                return r;
+            }
+        } else {
+            let ta = (0.0 - s0[i]) / ds[i];
+            let tb = (hi[i] - s0[i]) / ds[i];
+            a = max(a, min(ta, tb));
+            b = min(b, max(ta, tb));
+        }
+    }
+    if a > b {
+        return r;
+    }
+    r.inside = a == 0.0;
+    let stride = max(params.knobs.w, 1.0);
+    let len = length(ds) * (b - a);
+    let q0 = p0 * k0;
+    let q1 = p1 * k1;
+    let thick = params.knobs.x;
+    // Steps of `stride` pixels, and small enough in depth that no step moves the ray by more
+    // than half the thickness (a ray nearly along the view axis crosses few pixels but much
+    // depth, and would jump through every surface).
+    let za = -mix(q0, q1, a).z / mix(k0, k1, a);
+    let zb = -mix(q0, q1, b).z / mix(k0, k1, b);
+    let n_depth = abs(zb - za) / max(0.5 * thick * max(min(za, zb), 1.0e-4), 1.0e-9);
+    let n = u32(clamp(ceil(max(len / stride, n_depth)), 1.0, 16384.0));
+    var s_prev = a;
+    var zr_prev = -mix(q0, q1, a).z / mix(k0, k1, a);
+    var px_prev = vec2<i32>(floor(mix(s0, s1, a)));
+    var zs_prev = scene_depth(mode, px_prev);
+    for (var i = 1u; i <= n; i += 1u) {
+        let s = mix(a, b, f32(i) / f32(n));
+        let k = mix(k0, k1, s);
+        let zr = -mix(q0, q1, s).z / k;
+        let px = clamp(vec2<i32>(floor(mix(s0, s1, s))), vec2(0), vec2<i32>(size) - 1);
+        let zs = scene_depth(mode, px);
+        if zs > 0.0 && zr >= zs && zr - zs <= thick * zs && (zs_prev <= 0.0 || zr_prev <= zs_prev) {
+            let zsp = select(zs, zs_prev, zs_prev > 0.0);
+            let u = optics_march_crossing(zr_prev, zr, zsp, zs);
+            let sc = mix(s_prev, s, u);
+            let pv = mix(q0, q1, sc) / mix(k0, k1, sc);
+            r.hit = true;
+            r.pos = (v.world_from_view * vec4(pv, 1.0)).xyz;
+            r.px = px;
+            return r;
+        }
+        s_prev = s;
+        zr_prev = zr;
+        zs_prev = zs;
+        px_prev = px;
+    }
+    let pv = mix(q0, q1, b) / mix(k0, k1, b);
+    r.pos = (v.world_from_view * vec4(pv, 1.0)).xyz;
+    r.px = px_prev;
+    return r;
+}
+
+// Camera pixel and view depth of a world point (px.x < 0 when behind the camera).
+fn camera_project(x: vec3<f32>) -> vec3<f32> {
+    let h = params.camera.clip_from_view * (params.camera.view_from_world * vec4(x, 1.0));
+    if !(h.w > 0.0) {
+        return vec3(-1.0, -1.0, -1.0);
+    }
+    let px = ndc_to_px(h.xy / h.w, params.camera.size.xy);
+    let z = -(params.camera.view_from_world * vec4(x, 1.0)).z;
+    return vec3(px, z);
+}
+
+fn add_word(at: u32, w: u32) {
+    let old = atomicAdd(&map[at], w);
+    if old + w < old {
+        atomicAdd(&map[at + 1u], 1u);
+    }
+}
+
+// E = Φ / A_p at the camera pixel holding x, after the normal test; 64-bit fixed point.
+fn deposit(x: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, seed: u32) {
+    let c = camera_project(x);
+    let size = params.camera.size.xy;
+    if c.x < 0.0 || c.y < 0.0 || c.x >= size.x || c.y >= size.y {
+        atomicAdd(&counters[C_MISSES], 1u);
+        return;
+    }
+    let p = vec2<i32>(floor(c.xy));
+    let n = gbuffer_normal(p);
+    if n.w == 0.0 {
+        atomicAdd(&counters[C_MISSES], 1u);
+        return;
+    }
+    if dot(-d, n.xyz) < 0.0 {
+        atomicAdd(&counters[C_NORMAL], 1u);
+        return;
+    }
+    let eye = params.camera.eye.xyz;
+    let to = x - eye;
+    let dist = length(to);
+    let forward = -normalize(params.camera.world_from_view[2].xyz);
+    let cos_alpha = dot(to / dist, forward);
+    let cos_surface = dot(n.xyz, -to / dist);
+    let area = optics_pixel_footprint_area(dist, cos_alpha, cos_surface, params.camera.size.zw);
+    let e = flux / area;
+    if !(area > 0.0) || !finite3(e) {
+        atomicAdd(&counters[C_NAN], 1u);
+        return;
+    }
+    let base = 6u * (u32(p.y) * u32(size.x) + u32(p.x));
+    for (var ch = 0u; ch < 3u; ch += 1u) {
+        let w = optics_fixed_point_word(e[ch], FIXED_SCALE, optics_hash_unit(seed, ch + 11u));
+        if w.y != 0u {
+            atomicAdd(&counters[C_CLAMPED], 1u);
+        }
+        if w.x != 0u {
+            add_word(base + 2u * ch, w.x);
+        }
+    }
+    atomicAdd(&counters[C_CAMERA_HITS], 1u);
+}
+
+// From a point x in flight along d: the cascade's camera stage (section 3.2).
+fn camera_stage(x: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, light_hit: bool, seed: u32, t_max: f32) {
+    let c = camera_project(x);
+    let size = params.camera.size.xy;
+    let on_screen = c.x >= 0.0 && c.y >= 0.0 && c.x < size.x && c.y < size.y;
+    if on_screen {
+        let zs = camera_depth(vec2<i32>(floor(c.xy)));
+        let kind = optics_classify_reprojection(c.z, zs, params.knobs.x);
+        if zs > 0.0 {
+            atomicAdd(&counters[C_PLANE + kind], 1u);
+        }
+        if kind == 0u && zs > 0.0 && light_hit {
+            atomicAdd(&counters[C_CAMERA_DIRECT], 1u);
+            deposit(x, d, flux, seed);
+            return;
+        }
+        if kind == 2u && zs > 0.0 {
+            return;
+        }
+    }
+    // Second chance: march the camera's depth from x.
+    let m = march(params.camera, 0u, x, d, t_max);
+    if !m.hit {
+        atomicAdd(&counters[C_MISSES], 1u);
+        return;
+    }
+    deposit(m.pos, d, flux, seed);
+}
+
+@compute @workgroup_size(64)
+fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid.y * groups.x * 64u + gid.x;
+    let photons = u32(light.flux.w);
+    if i >= photons {
+        return;
+    }
+    let res = light.misc.z;
+    let uv = optics_r2_point(i, params.frame.yz);
+    let texel = vec2<i32>(min(uv * res, vec2(res - 1.0)));
+    let front = textureLoad(rsm, texel, i32(light.misc.w) + 1, 0);
+    if front.w == 0.0 {
+        atomicAdd(&counters[C_EMPTY], 1u);
+        return;
+    }
+    let v = light.view;
+    let p = unproject(v, uv * res, front.x);
+    var dir_in = -normalize(v.world_from_view[2].xyz);
+    var flux = light.flux.rgb;
+    if v.eye.w > 0.0 {
+        dir_in = normalize(p - v.eye.xyz);
+        // Texel solid angle cos^3(alpha) / (f_x f_y) (f in the flux) and the spot cone.
+        let cos_a = max(dot(dir_in, -normalize(v.world_from_view[2].xyz)), 0.0);
+        var f = cos_a * cos_a * cos_a;
+        if light.misc.y > 1.5 {
+            f *= optics_spot_attenuation(dot(dir_in, light.spot.xyz), light.spot.w, light.misc.x);
+        }
+        if f < params.knobs.y {
+            atomicAdd(&counters[C_DIM], 1u);
+            return;
+        }
+        flux *= f;
+    }
+    if !finite3(p) || !finite3(dir_in) {
+        atomicAdd(&counters[C_NAN], 1u);
+        return;
+    }
+    atomicAdd(&counters[C_EMITTED], 1u);
+    let seed = optics_pcg_hash(i ^ optics_pcg_hash(params.frame.x * 0x9E3779B9u + u32(light.misc.w)));
+    let inst = u32(abs(front.w)) - 1u;
+    let m0 = mats[3u * inst];
+    let kind = bitcast<u32>(m0.x);
+    let n = rsm_normal(front);
+    let cos_i = abs(dot(dir_in, n));
+    let scale = params.knobs.z;
+    let t_max = 4.0 * scale;
+    var d = dir_in;
+    var inside = false;
+    if kind == 2u {
+        d = optics_reflect(dir_in, n);
+        flux *= optics_fresnel_schlick(cos_i, mats[3u * inst + 2u].xyz);
+    } else {
+        let ior = max(m0.y, 1.0);
+        let fr = optics_fresnel_dielectric(cos_i, 1.0 / ior);
+        if optics_hash_unit(seed, 1u) < fr {
+            d = optics_reflect(dir_in, n);
+        } else if m0.z > 0.5 {
+            d = dir_in;  // thin sheet: no bending
+        } else {
+            let t = optics_refract(dir_in, n, 1.0 / ior);
+            d = t.xyz;
+            inside = true;
+        }
+    }
+    let side = select(n, -n, dot(d, n) < 0.0);
+    var o = optics_offset_ray_origin(p, side, scale);
+    if inside {
+        // Inside the medium: the caster-back layer (the exit) and the opaque layer (a receiver
+        // inside the medium, e.g. a pool floor), whichever the ray crosses first.
+        let to_back = march(v, 2u, o, d, t_max);
+        let to_floor = march(v, 1u, o, d, t_max);
+        let lb = select(3.0e38, distance(o, to_back.pos), to_back.hit);
+        let lf = select(3.0e38, distance(o, to_floor.pos), to_floor.hit);
+        let atten = mats[3u * inst + 1u].xyz;
+        if to_floor.hit && lf <= lb {
+            flux *= optics_beer_lambert(atten, m0.w, lf);
+            atomicAdd(&counters[C_INSIDE], 1u);
+            atomicAdd(&counters[C_LIGHT_HITS], 1u);
+            camera_stage(to_floor.pos, d, flux, true, seed, t_max);
+            return;
+        }
+        if !to_back.hit {
+            // Left the light's view inside the medium: the camera may still see the rest.
+            flux *= optics_beer_lambert(atten, m0.w, distance(o, to_back.pos));
+            atomicAdd(&counters[C_LIGHT_MISSES], 1u);
+            camera_stage(to_back.pos, d, flux, false, seed, t_max);
+            return;
+        }
+        flux *= optics_beer_lambert(atten, m0.w, lb);
+        let back = textureLoad(rsm, to_back.px, i32(light.misc.w) + 2, 0);
+        let nb = rsm_normal(back);
+        let ior = max(m0.y, 1.0);
+        let t = optics_refract(d, nb, ior);
+        if t.w == 0.0 {
+            atomicAdd(&counters[C_TIR], 1u);
+            return;
+        }
+        flux *= 1.0 - optics_fresnel_dielectric(abs(dot(d, nb)), ior);
+        d = t.xyz;
+        let out_side = select(nb, -nb, dot(d, nb) < 0.0);
+        o = optics_offset_ray_origin(to_back.pos, out_side, scale);
+    }
+    let m = march(v, 1u, o, d, t_max);
+    atomicAdd(&counters[select(C_LIGHT_MISSES, C_LIGHT_HITS, m.hit)], 1u);
+    camera_stage(m.pos, d, flux, m.hit, seed, t_max);
+}
+
+// The photon map in lux (out_a), cleared for the next frame; the view's depth and normal
+// (out_b: view depth or -1, normal xyz) for the denoiser.
+@compute @workgroup_size(8, 8)
+fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = vec2<u32>(params.camera.size.xy);
+    if gid.x >= size.x || gid.y >= size.y {
+        return;
+    }
+    let p = vec2<i32>(gid.xy);
+    let base = 6u * (gid.y * size.x + gid.x);
+    var e = vec3(0.0);
+    for (var ch = 0u; ch < 3u; ch += 1u) {
+        let lo = atomicExchange(&map[base + 2u * ch], 0u);
+        let hi = atomicExchange(&map[base + 2u * ch + 1u], 0u);
+        e[ch] = f32(hi) * (4294967296.0 / FIXED_SCALE) + f32(lo) / FIXED_SCALE;
+    }
+    textureStore(out_a, p, vec4(e, 0.0));
+    let z = camera_depth(p);
+    let n = gbuffer_normal(p);
+    textureStore(out_b, p, vec4(select(-1.0, z, n.w != 0.0), n.xyz));
+}

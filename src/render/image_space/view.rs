@@ -1,0 +1,690 @@
+//! Image-space state (render world): the scene's triangles and each caustic light's RSM view
+//! (rebuilt per scene generation), and per view the RSM array, the photon map, the
+//! denoiser's textures and the uniforms of the frame.
+
+use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
+use bevy::render::render_resource::{
+    Buffer, BufferDescriptor, BufferUsages, Extent3d, Texture, TextureDescriptor, TextureDimension,
+    TextureUsages, TextureView, TextureViewDescriptor, TextureViewDimension,
+};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::view::ExtractedView;
+
+use super::pipelines::{RSM_DEPTH_FORMAT, RSM_FORMAT};
+use crate::components::{CausticsTechnique, ImageSpaceSettings};
+use crate::optics::{cone_around_sphere, photon_flux_scale};
+use crate::render::aaps::scene::{AapsLight, ExtractedCausticsScene, aaps_lights, caster_sphere};
+use crate::render::volume::gpu::VolumeScene;
+use crate::render::{ExtractedCaustics, view_texture};
+
+/// Bytes between two lights' `IsLight` uniforms (dynamic offsets).
+pub const LIGHT_STRIDE: u64 = 512;
+/// Bytes between two `RsmView` uniforms and between two filter-step uniforms.
+pub const SMALL_STRIDE: u64 = 256;
+/// Counter words (`C_*` in trace.wgsl).
+pub const COUNTER_WORDS: u64 = 32;
+/// Filter-step uniforms: the variance pass and at most 8 à-trous iterations.
+pub const STEPS: u64 = 9;
+
+/// A view of the scene from a light or the camera, as `SpaceView` in trace.wgsl.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpaceView {
+    /// Projection.
+    pub clip_from_view: Mat4,
+    /// View from world.
+    pub view_from_world: Mat4,
+    /// Width and height (pixels or texels), focal lengths in pixels.
+    pub size: Vec4,
+    /// Eye (an orthographic view's origin) and the near distance (0: orthographic).
+    pub eye: Vec4,
+}
+
+impl SpaceView {
+    /// The 288 bytes of the GPU layout.
+    pub fn bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(288);
+        for m in [
+            self.clip_from_view,
+            self.clip_from_view.inverse(),
+            self.view_from_world,
+            self.view_from_world.inverse(),
+        ] {
+            push(&mut b, &m.to_cols_array());
+        }
+        push(&mut b, &self.size.to_array());
+        push(&mut b, &self.eye.to_array());
+        b
+    }
+}
+
+fn push(b: &mut Vec<u8>, v: &[f32]) {
+    b.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+}
+
+/// One caustic light's RSM view and photon parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RsmLight {
+    /// The light's view: orthographic (directional) or a perspective cone (point, spot).
+    pub view: SpaceView,
+    /// Viewing direction.
+    pub axis: Vec3,
+    /// The GPU light it came from.
+    pub light: AapsLight,
+}
+
+/// Widest cone a point or spot light's single RSM covers; a light that needs more (the
+/// casters around it) gets a cube of six 90-degree maps.
+pub const MAX_CONE_HALF_ANGLE: f32 = 60.0 * std::f32::consts::PI / 180.0;
+
+/// The RSMs of each light: `None` for one map, `Some(face)` for face `face` of a cube
+/// (+X, −X, +Y, −Y, +Z, −Z). A point or spot light whose casters' bounding sphere
+/// (`centre`, `radius`) is wider than [`MAX_CONE_HALF_ANGLE`] from it (or holds it) gets
+/// the six faces of a cube, which tile every direction once.
+pub fn rsm_sources(
+    lights: &[AapsLight],
+    (centre, radius): (Vec3, f32),
+) -> Vec<(AapsLight, Option<u8>)> {
+    let mut out = Vec::new();
+    for l in lights {
+        let needed = if l.kind == 0 {
+            0.0
+        } else {
+            let dist = (centre - l.position).length();
+            let cone = if dist <= radius {
+                std::f32::consts::PI
+            } else {
+                (radius / dist).clamp(0.0, 1.0).asin()
+            };
+            let outer = if l.kind == 2 {
+                l.cos_outer.clamp(-1.0, 1.0).acos()
+            } else {
+                std::f32::consts::PI
+            };
+            cone.min(outer)
+        };
+        if needed > MAX_CONE_HALF_ANGLE {
+            out.extend((0..6).map(|f| (*l, Some(f))));
+        } else {
+            out.push((*l, None));
+        }
+    }
+    out
+}
+
+/// The RSM view of `light` (or of its cube face `face`) over the casters' bounding sphere
+/// (`centre`, `radius`) in a scene of bounding radius `scene_radius` around `scene_centre`,
+/// at `res`² texels.
+///
+/// Directional: an orthographic square of side `2 · radius` around the casters, from the
+/// AAPS light's origin grid (placed before the whole scene). Point: the cone from the light
+/// that holds the casters' sphere ([`cone_around_sphere`]); spot: the same, at most its outer
+/// angle; a cube face: 90 degrees around its axis.
+pub fn rsm_light(
+    light: &AapsLight,
+    face: Option<u8>,
+    (centre, radius): (Vec3, f32),
+    (scene_centre, scene_radius): (Vec3, f32),
+    res: u32,
+) -> RsmLight {
+    let res_f = res as f32;
+    let up_for = |d: Vec3| {
+        if d.y.abs() < 0.9 { Vec3::Y } else { Vec3::X }
+    };
+    if light.kind == 0 {
+        let d = light.axis.normalize_or(Vec3::NEG_Y);
+        let eye = light.position + 0.5 * (light.side_u + light.side_v);
+        let r = 0.5 * light.side_u.length().max(1e-6);
+        let far = (eye - scene_centre).length() + 2.0 * scene_radius + r;
+        let view_from_world = Mat4::look_to_rh(eye, d, up_for(d));
+        let clip_from_view = Mat4::orthographic_rh(-r, r, -r, r, 0.0, far.max(1e-3));
+        return RsmLight {
+            view: SpaceView {
+                clip_from_view,
+                view_from_world,
+                size: Vec4::new(res_f, res_f, 0.0, 0.0),
+                eye: eye.extend(0.0),
+            },
+            axis: d,
+            light: *light,
+        };
+    }
+    let cap = if light.kind == 2 {
+        light.cos_outer.clamp(-1.0, 1.0).acos()
+    } else {
+        std::f32::consts::PI
+    };
+    let (axis, half) = match face {
+        Some(f) => {
+            let axes = [
+                Vec3::X,
+                Vec3::NEG_X,
+                Vec3::Y,
+                Vec3::NEG_Y,
+                Vec3::Z,
+                Vec3::NEG_Z,
+            ];
+            (axes[f as usize % 6], std::f32::consts::FRAC_PI_4)
+        }
+        None => cone_around_sphere(light.position, centre, radius, cap, light.axis),
+    };
+    let dist = (centre - light.position).length();
+    let scale = scene_radius.max(1e-3);
+    let near = ((dist - radius) * 0.5).max(scale * 1e-4);
+    let far = (dist + 2.0 * scene_radius + radius).max(near * 2.0);
+    let view_from_world = Mat4::look_to_rh(light.position, axis, up_for(axis));
+    let clip_from_view = Mat4::perspective_rh(2.0 * half, 1.0, near, far);
+    let f = 0.5 * res_f * clip_from_view.x_axis.x;
+    RsmLight {
+        view: SpaceView {
+            clip_from_view,
+            view_from_world,
+            size: Vec4::new(res_f, res_f, f, f),
+            eye: light.position.extend(near),
+        },
+        axis,
+        light: *light,
+    }
+}
+
+impl RsmLight {
+    /// The `IsLight` uniform for `photons` photons at `res`² texels, the light's RSM layers
+    /// starting at `first_layer`. The flux of a photon is the texel's flux times
+    /// `texels / photons` ([`photon_flux_scale`]): directional `E · (2r)² / photons`; point
+    /// and spot `I · cos³α / f² · texels / photons` with `I = Φ / 4π` (the shader applies
+    /// `cos³α` and the spot cone).
+    pub fn uniform(&self, photons: u32, res: u32, first_layer: u32) -> Vec<u8> {
+        let texels = (res as f32) * (res as f32);
+        let scale = photon_flux_scale(texels, photons as f32);
+        let flux = if self.light.kind == 0 {
+            // power = E (2r)² over the square: per texel power / texels.
+            self.light.power / texels * scale
+        } else {
+            let f = self.view.size.z.max(1e-6);
+            self.light.power / (4.0 * std::f32::consts::PI) / (f * f) * scale
+        };
+        let mut b = self.view.bytes();
+        push(&mut b, &[flux.x, flux.y, flux.z, photons as f32]);
+        let a = self.light.axis.normalize_or(Vec3::NEG_Y);
+        push(&mut b, &[a.x, a.y, a.z, self.light.cos_inner]);
+        push(
+            &mut b,
+            &[
+                self.light.cos_outer,
+                self.light.kind as f32,
+                res as f32,
+                first_layer as f32,
+            ],
+        );
+        b.resize(LIGHT_STRIDE as usize, 0);
+        b
+    }
+
+    /// The `RsmView` uniform of the raster passes.
+    pub fn raster_uniform(&self) -> Vec<u8> {
+        let mut b = Vec::new();
+        push(
+            &mut b,
+            &(self.view.clip_from_view * self.view.view_from_world).to_cols_array(),
+        );
+        push(&mut b, &self.view.view_from_world.to_cols_array());
+        let persp = if self.view.eye.w > 0.0 { 1.0 } else { 0.0 };
+        push(
+            &mut b,
+            &[self.view.eye.x, self.view.eye.y, self.view.eye.z, persp],
+        );
+        push(&mut b, &[self.axis.x, self.axis.y, self.axis.z, 0.0]);
+        b.resize(SMALL_STRIDE as usize, 0);
+        b
+    }
+}
+
+/// The scene for the image-space technique: world-space triangles and materials (the same
+/// buffers the volumes rasterise) and the lights that reach a caster.
+#[derive(Resource)]
+pub struct ImageSpaceScene {
+    /// Triangles, materials, bounds, scale.
+    pub scene: VolumeScene,
+    /// The RSM views: lights that reach a caster, in the AAPS light order, with their cube
+    /// face ([`rsm_sources`]).
+    pub lights: Vec<(AapsLight, Option<u8>)>,
+    /// Casters' bounding sphere.
+    pub casters: (Vec3, f32),
+    /// The scene's bounding sphere.
+    pub bounds: (Vec3, f32),
+}
+
+/// Build [`ImageSpaceScene`] when the gathered scene changes and a camera uses the technique;
+/// none when no caustic light reaches a caster.
+pub fn prepare_image_space_scene(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    extracted: Option<Res<ExtractedCausticsScene>>,
+    current: Option<Res<ImageSpaceScene>>,
+    views: Query<&ExtractedCaustics>,
+    mut idle: Local<Option<u64>>,
+) {
+    let wanted = views
+        .iter()
+        .any(|c| c.technique == CausticsTechnique::ImageSpace);
+    let Some(extracted) = extracted.filter(|_| wanted) else {
+        if current.is_some() {
+            commands.remove_resource::<ImageSpaceScene>();
+        }
+        *idle = None;
+        return;
+    };
+    let generation = extracted.0.generation;
+    if current
+        .as_ref()
+        .is_some_and(|c| c.scene.generation == generation)
+        || *idle == Some(generation)
+    {
+        return;
+    }
+    let tlas = &extracted.0.tlas;
+    let lights: Vec<AapsLight> = aaps_lights(tlas, &extracted.0.lights)
+        .into_iter()
+        .map(|(_, l)| l)
+        .collect();
+    let casters = caster_sphere(tlas);
+    let (Some(casters), false) = (casters, lights.is_empty()) else {
+        if current.is_some() {
+            commands.remove_resource::<ImageSpaceScene>();
+        }
+        *idle = Some(generation);
+        return;
+    };
+    let bounds = tlas.bounds_where(|_| true).map_or(casters, |(lo, hi)| {
+        ((lo + hi) * 0.5, ((hi - lo) * 0.5).length())
+    });
+    commands.insert_resource(ImageSpaceScene {
+        scene: VolumeScene::build(&device, &extracted.0),
+        lights: rsm_sources(&lights, casters),
+        casters,
+        bounds,
+    });
+    *idle = None;
+}
+
+/// What forces a view's state to be rebuilt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageSpaceKey {
+    /// Viewport.
+    pub size: UVec2,
+    /// RSM side.
+    pub rsm: u32,
+    /// Lights.
+    pub lights: u32,
+}
+
+/// A view-sized texture with its default view.
+pub type Tex = (Texture, TextureView);
+
+/// Per-view state of the image-space technique.
+#[derive(Component)]
+pub struct ImageSpaceViewState {
+    /// Layout key.
+    pub key: ImageSpaceKey,
+    /// RSM array (3 layers per light: opaque, caster front, caster back) and its array view.
+    pub rsm: (Texture, TextureView),
+    /// One 2D view per RSM layer (render attachments).
+    pub rsm_layers: Vec<TextureView>,
+    /// RSM depth attachment.
+    pub rsm_depth: TextureView,
+    /// Photon map: 64-bit fixed point per channel (6 words per pixel).
+    pub map: Buffer,
+    /// Counters.
+    pub counters: Buffer,
+    /// Filter ping-pong (the raw photon map and the temporal result live here too).
+    pub filter: [Tex; 2],
+    /// View depth and normal, this frame's and last frame's (by parity).
+    pub zn: [Tex; 2],
+    /// Colour history (rgb, history length) by parity.
+    pub history: [Tex; 2],
+    /// Luminance moments (m1, m2, history length) by parity.
+    pub moments: [Tex; 2],
+    /// 1x1 placeholders for unused texture slots: one sampled, three storage.
+    pub dummy_in: TextureView,
+    /// See `dummy_in`.
+    pub dummy_out: [TextureView; 3],
+    /// `IsParams`.
+    pub params: Buffer,
+    /// `IsLight` per light, [`LIGHT_STRIDE`] apart.
+    pub lights: Buffer,
+    /// `RsmView` per light, [`SMALL_STRIDE`] apart.
+    pub rsm_views: Buffer,
+    /// Filter steps, [`SMALL_STRIDE`] apart.
+    pub steps: Buffer,
+    /// Frames traced so far.
+    pub frame: u32,
+    /// The scene generation of the last frame (a change resets the history).
+    pub generation: Option<u64>,
+    /// The previous frame's `clip_from_world`.
+    pub prev_clip_from_world: Option<Mat4>,
+    /// Sanitised settings of this frame.
+    pub settings: ImageSpaceSettings,
+    /// Photons per light this frame.
+    pub photons: u32,
+}
+
+/// Marks a view whose image-space passes run this frame.
+#[derive(Component)]
+pub struct ImageSpaceFrame;
+
+fn texture(
+    device: &RenderDevice,
+    label: &'static str,
+    size: UVec2,
+    layers: u32,
+    format: bevy::render::render_resource::TextureFormat,
+    usage: TextureUsages,
+) -> Texture {
+    device.create_texture(&TextureDescriptor {
+        label: Some(label),
+        size: Extent3d {
+            width: size.x,
+            height: size.y,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+fn uniform(device: &RenderDevice, label: &'static str, size: u64) -> Buffer {
+    device.create_buffer(&BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+impl ImageSpaceViewState {
+    fn new(device: &RenderDevice, key: ImageSpaceKey, settings: ImageSpaceSettings) -> Self {
+        let layers = 3 * key.lights.max(1);
+        let rsm = texture(
+            device,
+            "caustics:image_space:rsm",
+            UVec2::splat(key.rsm),
+            layers,
+            RSM_FORMAT,
+            TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING,
+        );
+        let rsm_view = rsm.create_view(&TextureViewDescriptor {
+            dimension: Some(TextureViewDimension::D2Array),
+            ..default()
+        });
+        let rsm_layers = (0..layers)
+            .map(|l| {
+                rsm.create_view(&TextureViewDescriptor {
+                    dimension: Some(TextureViewDimension::D2),
+                    base_array_layer: l,
+                    array_layer_count: Some(1),
+                    ..default()
+                })
+            })
+            .collect();
+        let rsm_depth = texture(
+            device,
+            "caustics:image_space:rsm_depth",
+            UVec2::splat(key.rsm),
+            1,
+            RSM_DEPTH_FORMAT,
+            TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&TextureViewDescriptor::default());
+        let pixels = key.size.x as u64 * key.size.y as u64;
+        let storage = |label: &'static str, size: u64| {
+            device.create_buffer(&BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: BufferUsages::STORAGE | BufferUsages::COPY_DST | BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let usage = TextureUsages::TEXTURE_BINDING | TextureUsages::STORAGE_BINDING;
+        let view_tex = |label| {
+            let t = view_texture(device, label, key.size, usage);
+            let v = t.create_view(&TextureViewDescriptor::default());
+            (t, v)
+        };
+        let one = |label| {
+            view_texture(device, label, UVec2::ONE, usage)
+                .create_view(&TextureViewDescriptor::default())
+        };
+        Self {
+            key,
+            rsm: (rsm, rsm_view),
+            rsm_layers,
+            rsm_depth,
+            map: storage("caustics:image_space:photon_map", pixels * 24),
+            counters: storage("caustics:image_space:counters", COUNTER_WORDS * 4),
+            filter: [
+                view_tex("caustics:image_space:filter0"),
+                view_tex("caustics:image_space:filter1"),
+            ],
+            zn: [
+                view_tex("caustics:image_space:zn0"),
+                view_tex("caustics:image_space:zn1"),
+            ],
+            history: [
+                view_tex("caustics:image_space:history0"),
+                view_tex("caustics:image_space:history1"),
+            ],
+            moments: [
+                view_tex("caustics:image_space:moments0"),
+                view_tex("caustics:image_space:moments1"),
+            ],
+            dummy_in: one("caustics:image_space:dummy_in"),
+            dummy_out: [
+                one("caustics:image_space:dummy_out0"),
+                one("caustics:image_space:dummy_out1"),
+                one("caustics:image_space:dummy_out2"),
+            ],
+            params: uniform(device, "caustics:image_space:params", 512),
+            lights: uniform(
+                device,
+                "caustics:image_space:lights",
+                LIGHT_STRIDE * key.lights.max(1) as u64,
+            ),
+            rsm_views: uniform(
+                device,
+                "caustics:image_space:rsm_views",
+                SMALL_STRIDE * key.lights.max(1) as u64,
+            ),
+            steps: uniform(device, "caustics:image_space:steps", SMALL_STRIDE * STEPS),
+            frame: 0,
+            generation: None,
+            prev_clip_from_world: None,
+            settings,
+            photons: 0,
+        }
+    }
+}
+
+/// The camera's `SpaceView`: Bevy's projection (infinite reverse-Z perspective or
+/// orthographic) and the focal lengths `f = P00 w / 2`, `P11 h / 2` in pixels.
+pub fn camera_space_view(view: &ExtractedView, size: UVec2) -> SpaceView {
+    let p = view.clip_from_view;
+    let world_from_view = view.world_from_view.to_matrix();
+    let perspective = p.w_axis.w == 0.0;
+    let near = if perspective {
+        p.w_axis.z.abs().max(1e-6)
+    } else {
+        0.0
+    };
+    SpaceView {
+        clip_from_view: p,
+        view_from_world: world_from_view.inverse(),
+        size: Vec4::new(
+            size.x as f32,
+            size.y as f32,
+            0.5 * size.x as f32 * p.x_axis.x,
+            0.5 * size.y as f32 * p.y_axis.y,
+        ),
+        eye: view.world_from_view.translation().extend(near),
+    }
+}
+
+/// Flags of `IsParams.frame.w` (`FLAG_*` in trace.wgsl).
+pub const FLAG_DENOISE: u32 = 1;
+/// See [`FLAG_DENOISE`].
+pub const FLAG_RESET: u32 = 2;
+/// Step flag: the pass writes the colour history.
+pub const FLAG_HISTORY: u32 = 4;
+/// Step flag: the pass writes the caustics buffer.
+pub const FLAG_LAST: u32 = 8;
+
+/// Create or resize each image-space view's state and write the frame's uniforms.
+#[allow(clippy::type_complexity)]
+pub fn prepare_image_space_views(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    scene: Option<Res<ImageSpaceScene>>,
+    limits: Option<Res<crate::limits::CausticsLimits>>,
+    mut views: Query<(
+        Entity,
+        &ExtractedCaustics,
+        &ExtractedCamera,
+        &ExtractedView,
+        Option<&mut ImageSpaceViewState>,
+    )>,
+) {
+    let limits = limits.map(|l| l.clone()).unwrap_or_default();
+    for (entity, caustics, camera, view, state) in &mut views {
+        let size = camera.physical_viewport_size.unwrap_or_default();
+        let active = caustics.technique == CausticsTechnique::ImageSpace
+            && size.x > 0
+            && size.y > 0
+            && scene.is_some();
+        if !active {
+            commands.entity(entity).remove::<ImageSpaceFrame>();
+            if state.is_some() && caustics.technique != CausticsTechnique::ImageSpace {
+                commands.entity(entity).remove::<ImageSpaceViewState>();
+            }
+            continue;
+        }
+        let scene = scene.as_ref().unwrap();
+        let settings = caustics.image_space.sanitized_for(&limits);
+        let key = ImageSpaceKey {
+            size,
+            rsm: settings.rsm_resolution,
+            lights: scene.lights.len() as u32,
+        };
+        let mut fresh = None;
+        let state = match state {
+            Some(s) if s.key == key => s.into_inner(),
+            _ => {
+                fresh = Some(ImageSpaceViewState::new(&device, key, settings.clone()));
+                fresh.as_mut().unwrap()
+            }
+        };
+        state.settings = settings.clone();
+        let photons = caustics
+            .photons_per_light
+            .min(crate::limits::MAX_IMAGE_SPACE_PHOTONS) as u32;
+        state.photons = photons;
+        write_uniforms(&queue, state, scene, view, photons);
+        if let Some(s) = fresh.take() {
+            commands.entity(entity).insert(s);
+        }
+        if photons > 0 {
+            commands.entity(entity).insert(ImageSpaceFrame);
+        } else {
+            commands.entity(entity).remove::<ImageSpaceFrame>();
+        }
+    }
+}
+
+fn write_uniforms(
+    queue: &RenderQueue,
+    state: &mut ImageSpaceViewState,
+    scene: &ImageSpaceScene,
+    view: &ExtractedView,
+    photons: u32,
+) {
+    let s = &state.settings;
+    let res = state.key.rsm;
+    let mut lights = Vec::new();
+    let mut rsm_views = Vec::new();
+    for (i, (l, face)) in scene.lights.iter().enumerate() {
+        let r = rsm_light(l, *face, scene.casters, scene.bounds, res);
+        // A cube's faces share the light's photons.
+        let n = if face.is_some() {
+            photons.div_ceil(6)
+        } else {
+            photons
+        };
+        lights.extend(r.uniform(n, res, 3 * i as u32));
+        rsm_views.extend(r.raster_uniform());
+    }
+    queue.write_buffer(&state.lights, 0, &lights);
+    queue.write_buffer(&state.rsm_views, 0, &rsm_views);
+    let camera = camera_space_view(view, state.key.size);
+    let clip_from_world = crate::render::clip_from_world(view);
+    let reset = s.reset_on_change && state.generation != Some(scene.scene.generation);
+    state.generation = Some(scene.scene.generation);
+    let prev = state.prev_clip_from_world.unwrap_or(clip_from_world);
+    state.prev_clip_from_world = Some(clip_from_world);
+    let frame = state.frame;
+    state.frame = state.frame.wrapping_add(1);
+    let rot = [
+        crate::optics::pcg_hash(frame.wrapping_mul(2) ^ 0x5bd1_e995),
+        crate::optics::pcg_hash(frame.wrapping_mul(2) + 1),
+    ];
+    let flags = (if s.denoise { FLAG_DENOISE } else { 0 }) | (if reset { FLAG_RESET } else { 0 });
+    let mut b = camera.bytes();
+    push(&mut b, &prev.to_cols_array());
+    b.extend(
+        [frame, rot[0], rot[1], flags]
+            .iter()
+            .flat_map(|x| x.to_le_bytes()),
+    );
+    push(
+        &mut b,
+        &[
+            s.thickness,
+            s.luminance_cutoff,
+            scene.scene.scale,
+            s.stride as f32,
+        ],
+    );
+    push(
+        &mut b,
+        &[
+            s.alpha_color,
+            s.alpha_moments,
+            s.history_cap as f32,
+            s.sigma_depth,
+        ],
+    );
+    push(&mut b, &[s.sigma_normal, s.sigma_luminance, 0.0, 0.0]);
+    b.resize(512, 0);
+    queue.write_buffer(&state.params, 0, &b);
+    // Steps: 0 the variance pass, 1 + i the à-trous iteration i.
+    let n = s.atrous_iterations;
+    let mut steps = vec![0u8; (SMALL_STRIDE * STEPS) as usize];
+    for k in 0..STEPS as u32 {
+        let mut flags = 0;
+        if k == n {
+            flags |= FLAG_LAST;
+        }
+        // The history is the variance pass's output without iterations, else iteration 0's.
+        if (n == 0 && k == 0) || (n > 0 && k == 1) {
+            flags |= FLAG_HISTORY;
+        }
+        let step = if k == 0 { 0 } else { 1u32 << (k - 1) };
+        let at = (k as u64 * SMALL_STRIDE) as usize;
+        for (i, v) in [step, flags, k, 0].iter().enumerate() {
+            steps[at + 4 * i..at + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+    queue.write_buffer(&state.steps, 0, &steps);
+}

@@ -1,0 +1,272 @@
+//! The image-space technique on lavapipe: closed forms, energy against the CPU reference, the
+//! denoiser's worth (less flicker, lower error), no smearing after a light moves, and nothing
+//! dispatched without work. 128² targets, 65 536 photons per light, 256² RSMs.
+
+use bevy::prelude::*;
+use bevy_caustics::headless::{RenderJob, RenderReport, run};
+use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
+use bevy_caustics::{CausticsTechnique, ImageSpaceSettings, scenes};
+
+use super::{GPU, closed_form_cases, require_gpu, scene};
+
+/// Frames before the caustics buffer is read (the denoiser's history saturates at 1 / α = 5
+/// frames; 16 give it three time constants).
+const FRAMES: u32 = 16;
+/// Photons per light and frame.
+const PHOTONS: u64 = 1 << 16;
+
+fn settings(denoise: bool) -> ImageSpaceSettings {
+    ImageSpaceSettings {
+        rsm_resolution: 256,
+        denoise,
+        ..Default::default()
+    }
+}
+
+fn image_space(job: RenderJob) -> RenderReport {
+    let name = job.scene.display().to_string();
+    run(RenderJob {
+        technique: CausticsTechnique::ImageSpace,
+        width: 128,
+        height: 128,
+        photons: Some(PHOTONS),
+        ..job
+    })
+    .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn reference(name: &str) -> CausticImage {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("assets/reference/{name}_128.exr"));
+    CausticImage::read_exr(&p).expect("cached reference")
+}
+
+/// Mean caustic irradiance over the interior of the lit region of `mirror_wall` and
+/// `glass_slab` within 10 % of the closed form after 16 frames.
+#[test]
+fn image_space_closed_forms() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    for (desc, n, d, region, expect) in closed_form_cases() {
+        let report = image_space(RenderJob {
+            scene: scene(&desc.name),
+            frames: FRAMES,
+            image_space: settings(true),
+            ..Default::default()
+        });
+        let img = report.caustics.expect("caustics");
+        assert!(img.all_finite());
+        let (_, _, cam) = desc.to_trace(128, 128);
+        let (mean, px) = plane_region_mean(&img, &cam, n, d, region);
+        let err = mean / expect - 1.0;
+        println!(
+            "{}: image-space mean {mean:.1} lx over {px} px after {FRAMES} frames, closed form {expect:.1} lx, error {:+.2} %, {:?}, passes {:?}",
+            desc.name,
+            err * 100.0,
+            report.image_space,
+            report.pass_ms
+        );
+        assert!(px > 200);
+        assert!(err.abs() < 0.10, "{}: {:+.2} %", desc.name, err * 100.0);
+    }
+}
+
+/// Total caustic energy of `glass_sphere` (two refractions through the caster-back layer) and
+/// `pool` (camera under water) within 10 % of the CPU reference. `ring` (a point light inside
+/// a mirror ring, six cube-face RSMs) is held to 35 %: it loses about 30 % today (see the
+/// issue); RMSE and FLIP printed for the note.
+#[test]
+fn image_space_energy_matches_reference() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    for (name, bound) in [("glass_sphere", 0.10), ("pool", 0.10), ("ring", 0.35)] {
+        let report = image_space(RenderJob {
+            scene: scene(name),
+            frames: FRAMES,
+            image_space: settings(true),
+            ..Default::default()
+        });
+        let img = report.caustics.expect("caustics");
+        let m = compare(&img, &reference(name), None).expect("same size");
+        println!(
+            "{name}: energy error {:+.2} %, RMSE {:.1} lx, FLIP {:.4}, {:?}, passes {:?}",
+            m.energy_error * 100.0,
+            m.rmse,
+            m.flip,
+            report.image_space,
+            report.pass_ms
+        );
+        assert!(
+            m.energy_error.abs() < bound,
+            "{name}: {:+.2} %",
+            m.energy_error * 100.0
+        );
+    }
+}
+
+/// Relative change between consecutive frames: `Σ|L_t − L_{t−1}| / Σ L_t` of luminance.
+fn frame_change(a: &CausticImage, b: &CausticImage) -> f64 {
+    let (mut d, mut s) = (0.0f64, 0.0f64);
+    for (x, y) in a.data.iter().zip(&b.data) {
+        let (lx, ly) = (
+            bevy_caustics::optics::luminance(*x) as f64,
+            bevy_caustics::optics::luminance(*y) as f64,
+        );
+        d += (lx - ly).abs();
+        s += ly;
+    }
+    d / s.max(1e-30)
+}
+
+/// Tilt the sun 8 degrees away at the first measured frame and back at frame 12.
+fn tilt_sun(world: &mut World, frame: u32) {
+    let angle = match frame {
+        0 => 8f32.to_radians(),
+        12 => -8f32.to_radians(),
+        _ => return,
+    };
+    let mut q = world.query_filtered::<&mut Transform, With<DirectionalLight>>();
+    for mut t in q.iter_mut(world) {
+        t.rotate_around(Vec3::ZERO, Quat::from_rotation_z(angle));
+    }
+}
+
+/// Denoising pays and does not smear, on `glass_sphere` (a still camera):
+/// - the mean frame-to-frame relative change of the caustics buffer over the last 8 frames is
+///   at least 4x lower with SVGF than without;
+/// - the RMSE against the reference at frame 16 is lower with SVGF than without;
+/// - after the sun moves back to its place (frame 12, from 8 degrees away), the RMSE against
+///   the reference falls below 1.5x the settled RMSE within the 8 following frames.
+#[test]
+fn image_space_denoising_pays_and_does_not_smear() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let reference = reference("glass_sphere");
+    let runs: Vec<Vec<CausticImage>> = [true, false]
+        .map(|denoise| {
+            image_space(RenderJob {
+                scene: scene("glass_sphere"),
+                frames: 24,
+                every_frame: true,
+                image_space: settings(denoise),
+                ..Default::default()
+            })
+            .frame_caustics
+        })
+        .into();
+    let mut change = [0.0f64; 2];
+    let mut rmse16 = [0.0f64; 2];
+    for (k, frames) in runs.iter().enumerate() {
+        assert!(frames.len() >= 20, "{} frames read back", frames.len());
+        let n = frames.len();
+        change[k] = (n - 8..n)
+            .map(|i| frame_change(&frames[i], &frames[i - 1]))
+            .sum::<f64>()
+            / 8.0;
+        rmse16[k] = compare(&frames[15], &reference, None).unwrap().rmse;
+    }
+    let settled = compare(runs[0].last().unwrap(), &reference, None)
+        .unwrap()
+        .rmse;
+    println!(
+        "frame-to-frame change: SVGF {:.4}, raw {:.4} ({:.1}x less); RMSE at frame 16: SVGF {:.1} lx, raw {:.1} lx; settled {settled:.1} lx",
+        change[0],
+        change[1],
+        change[1] / change[0],
+        rmse16[0],
+        rmse16[1]
+    );
+    assert!(change[0] * 4.0 <= change[1], "{change:?}");
+    assert!(rmse16[0] < rmse16[1], "{rmse16:?}");
+
+    let moved = image_space(RenderJob {
+        scene: scene("glass_sphere"),
+        frames: 21,
+        every_frame: true,
+        per_frame: Some(tilt_sun),
+        image_space: settings(true),
+        ..Default::default()
+    })
+    .frame_caustics;
+    assert!(moved.len() >= 21, "{} frames read back", moved.len());
+    let after: Vec<f64> = (13..21)
+        .map(|i| compare(&moved[i], &reference, None).unwrap().rmse)
+        .collect();
+    let before = compare(&moved[11], &reference, None).unwrap().rmse;
+    println!(
+        "sun moved back at frame 12: RMSE before {before:.1} lx, frames 13..20 {after:.1?}, settled {settled:.1} lx"
+    );
+    // The move shows (the first frame after it is far from the reference) and passes.
+    assert!(after[0] > 1.5 * settled, "{after:?} vs settled {settled}");
+    assert!(
+        after.iter().any(|&e| e < 1.5 * settled),
+        "{after:?} vs settled {settled}"
+    );
+    // What the reset buys: the same move with the history kept.
+    let kept = image_space(RenderJob {
+        scene: scene("glass_sphere"),
+        frames: 21,
+        every_frame: true,
+        per_frame: Some(tilt_sun),
+        image_space: ImageSpaceSettings {
+            reset_on_change: false,
+            ..settings(true)
+        },
+        ..Default::default()
+    })
+    .frame_caustics;
+    let kept: Vec<f64> = (13..21.min(kept.len()))
+        .map(|i| compare(&kept[i], &reference, None).unwrap().rmse)
+        .collect();
+    println!("without the reset: frames 13..20 {kept:.1?}");
+}
+
+/// No pass without work: an empty scene, a spot light aimed away from every caster, zero
+/// photons.
+#[test]
+fn image_space_dispatches_nothing_without_work() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_is_{}", std::process::id()));
+    let mut away = scenes::glass_sphere();
+    away.name = "spot_away".into();
+    away.lights[0].kind = scenes::LightKind::Spot {
+        candela: 5000.0,
+        inner: 0.2,
+        outer: 0.3,
+    };
+    away.lights[0].translation = Vec3::new(0.0, 3.0, 0.0);
+    away.lights[0].rotation = scenes::shine_along(Vec3::Y);
+    scenes::gltf::write_gltf(&away, &dir).unwrap();
+    for (path, photons) in [
+        (scene("empty"), PHOTONS),
+        (dir.join("spot_away.gltf"), PHOTONS),
+        (scene("glass_sphere"), 0),
+    ] {
+        let report = run(RenderJob {
+            scene: path.clone(),
+            technique: CausticsTechnique::ImageSpace,
+            width: 32,
+            height: 32,
+            photons: Some(photons),
+            frames: 4,
+            image_space: settings(true),
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            report.passes.is_empty(),
+            "{}: {:?}",
+            path.display(),
+            report.passes
+        );
+    }
+}
