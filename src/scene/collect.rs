@@ -202,12 +202,17 @@ type Dirty<'w, 's> = (
         'w,
         's,
         (),
-        Or<(
-            Changed<CausticLight>,
-            Changed<DirectionalLight>,
-            Changed<PointLight>,
-            Changed<SpotLight>,
-        )>,
+        (
+            With<CausticLight>,
+            Or<(
+                Changed<CausticLight>,
+                Changed<DirectionalLight>,
+                Changed<PointLight>,
+                Changed<SpotLight>,
+                // A light that moves or turns changes its caustics.
+                Changed<GlobalTransform>,
+            )>,
+        ),
     >,
     RemovedComponents<'w, 's, Mesh3d>,
     RemovedComponents<'w, 's, CausticLight>,

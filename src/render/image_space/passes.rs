@@ -322,19 +322,23 @@ fn svgf_passes(
     if n == 0 {
         return;
     }
-    // Iteration i reads filter[i % 2] and writes filter[(i + 1) % 2] (or the buffer).
+    // Iteration i reads filter[i % 2] and writes filter[(i + 1) % 2] (or the buffer): first
+    // each pixel's luminance deviation and depth gradient into `aux`, then the gather.
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
-    let groups: Vec<BindGroup> = (1..=n)
+    let groups: Vec<[BindGroup; 2]> = (1..=n)
         .map(|k| {
             let i = (k - 1) as usize;
-            c.group(
-                ctx,
-                Slots {
-                    src: [&s.filter[i % 2].1, d_in, &s.moments[cur].1, &s.zn[cur].1],
-                    out: [target(k, (i + 1) % 2), history(k), &d_out[2]],
-                },
-            )
+            let input = &s.filter[i % 2].1;
+            let prep = Slots {
+                src: [input, d_in, d_in, &s.zn[cur].1],
+                out: [&d_out[0], &d_out[1], &s.aux.1],
+            };
+            let gather = Slots {
+                src: [input, &s.aux.1, &s.moments[cur].1, &s.zn[cur].1],
+                out: [target(k, (i + 1) % 2), history(k), &d_out[2]],
+            };
+            [c.group(ctx, prep), c.group(ctx, gather)]
         })
         .collect();
     let encoder = ctx.command_encoder();
@@ -343,10 +347,13 @@ fn svgf_passes(
         timestamp_writes: None,
     });
     let span = diagnostics.pass_span(&mut pass, ATROUS_PASS);
-    pass.set_pipeline(compute[4]);
-    for (k, group) in groups.iter().enumerate() {
-        pass.set_bind_group(0, group, &[0, ((k as u64 + 1) * SMALL_STRIDE) as u32]);
-        pass.dispatch_workgroups(full[0], full[1], full[2]);
+    for (k, stages) in groups.iter().enumerate() {
+        let offsets = [0, ((k as u64 + 1) * SMALL_STRIDE) as u32];
+        for (j, group) in stages.iter().enumerate() {
+            pass.set_pipeline(compute[4 + j]);
+            pass.set_bind_group(0, group, &offsets);
+            pass.dispatch_workgroups(full[0], full[1], full[2]);
+        }
     }
     span.end(&mut pass);
     log.record(ATROUS_PASS);

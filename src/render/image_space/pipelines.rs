@@ -44,7 +44,14 @@ pub struct ImageSpaceShaders {
 }
 
 /// The compute entry points, in [`ImageSpacePipelines::compute`] order.
-pub const COMPUTE_ENTRIES: [&str; 5] = ["trace", "resolve", "temporal", "variance", "atrous"];
+pub const COMPUTE_ENTRIES: [&str; 6] = [
+    "trace",
+    "resolve",
+    "temporal",
+    "variance",
+    "atrous_prep",
+    "atrous",
+];
 
 /// Layouts and pipeline ids.
 #[derive(Resource)]
@@ -54,7 +61,7 @@ pub struct ImageSpacePipelines {
     /// Group 0 of the RSM passes.
     pub rsm_layout: BindGroupLayoutDescriptor,
     /// [`COMPUTE_ENTRIES`].
-    pub compute: [CachedComputePipelineId; 5],
+    pub compute: [CachedComputePipelineId; 6],
     /// Opaque, caster-front and caster-back RSM layers.
     pub rsm: [CachedRenderPipelineId; 3],
 }

@@ -3,8 +3,9 @@
 // 2x2 bilinear tap, each tap tested for depth and normal; none valid is a disocclusion),
 // blends colour and luminance moments with max(alpha, 1 / history); `variance` turns the
 // moments into a variance (a 7x7 bilateral estimate while the history is under 4 frames);
-// `atrous` is one 5x5 B3 à-trous iteration with depth, normal and luminance edge stopping
-// (optics_svgf_weight) on a 3x3-prefiltered variance. Irradiance in lux throughout: no
+// `atrous_prep` + `atrous` are one 5x5 B3 à-trous iteration with depth, normal and luminance
+// edge stopping (optics_svgf_weight) on a 3x3-prefiltered variance, with symmetric weights
+// (see `atrous`). Irradiance in lux throughout: no
 // albedo to demodulate, no clamp to [0, 1]. Appended to trace.wgsl (same bindings).
 
 fn lum(c: vec3<f32>) -> f32 {
@@ -155,39 +156,70 @@ fn variance(@builtin(global_invocation_id) gid: vec3<u32>) {
     filter_out(p, c, m.y - m.x * m.x);
 }
 
+// The à-trous weight from pixel q (the source) to pixel p: B3 kernel h, then SVGF's depth,
+// normal and luminance terms, with q's depth gradient and the smaller of the two pixels'
+// luminance deviations (`aux` = (0, σ_l √Var prefiltered, dz/dx, dz/dy) of each): the rule
+// is symmetric, w(q → p) = w(p → q) but for the depth gradient's pixel.
+fn atrous_weight(o: vec2<i32>, zq: vec4<f32>, zp: vec4<f32>, cq: vec3<f32>, cp: vec3<f32>, aux_q: vec4<f32>, aux_p: vec4<f32>) -> f32 {
+    let s = f32(pass_step.x);
+    let off = vec2<f32>(o) * s;
+    let b3 = array<f32, 3>(0.375, 0.25, 0.0625);
+    let h = b3[abs(o.x)] * b3[abs(o.y)] / (b3[0] * b3[0]);
+    let dz_scaled = params.svgf.w * max(abs(dot(aux_q.zw, off)), 1.0e-3 * zq.x);
+    let l_sigma = min(aux_q.y, aux_p.y);
+    return h * optics_svgf_weight(zp.x - zq.x, dz_scaled, dot(zp.yzw, zq.yzw), params.svgf2.x, lum(cp) - lum(cq), l_sigma);
+}
+
+// Pass 1 of an à-trous iteration: per pixel its luminance deviation (σ_l times the root of the
+// 3x3 Gaussian of the variance) and depth gradient, into out_c.
+@compute @workgroup_size(8, 8)
+fn atrous_prep(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = vec2<i32>(gid.xy);
+    if !in_view(q) {
+        return;
+    }
+    let zq = textureLoad(src_d, q, 0);
+    if zq.x <= 0.0 {
+        textureStore(out_c, q, vec4(0.0));
+        return;
+    }
+    var v = 0.0;
+    for (var dy = -1; dy <= 1; dy += 1) {
+        for (var dx = -1; dx <= 1; dx += 1) {
+            let r = clamp(q + vec2(dx, dy), vec2(0), view_size() - 1);
+            let k = select(0.5, 1.0, dx == 0) * select(0.5, 1.0, dy == 0) * 0.25;
+            v += k * clean(textureLoad(src_a, r, 0)).w;
+        }
+    }
+    let zx = textureLoad(src_d, clamp(q + vec2(1, 0), vec2(0), view_size() - 1), 0).x
+        - textureLoad(src_d, clamp(q - vec2(1, 0), vec2(0), view_size() - 1), 0).x;
+    let zy = textureLoad(src_d, clamp(q + vec2(0, 1), vec2(0), view_size() - 1), 0).x
+        - textureLoad(src_d, clamp(q - vec2(0, 1), vec2(0), view_size() - 1), 0).x;
+    textureStore(out_c, q, vec4(0.0, params.svgf2.y * sqrt(max(v, 0.0)), zx * 0.5, zy * 0.5));
+}
+
+// Pass 2: pixel p gathers its 5x5 neighbourhood with the symmetric weights (src_b: the prep
+// pass's data), normalised by their sum. SVGF's own rule, p's deviation alone, is not
+// symmetric: on a sparse photon map a dark, quiet pixel rejects its bright neighbour while
+// the bright, noisy pixel averages in the dark ones, and the caustic loses energy (-25 % on
+// `ring`); with the smaller deviation of the two, both reject each other and the total stays
+// within a few percent. Variance: Σ w² var_q / (Σ w)².
 @compute @workgroup_size(8, 8)
 fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = vec2<i32>(gid.xy);
     if !in_view(p) {
         return;
     }
-    let zn = textureLoad(src_d, p, 0);
-    let centre = clean(textureLoad(src_a, p, 0));
-    if zn.x <= 0.0 {
+    let zp = textureLoad(src_d, p, 0);
+    if zp.x <= 0.0 {
         filter_out(p, vec3(0.0), 0.0);
         return;
     }
-    // 3x3 Gaussian of the variance (1/4 centre, 1/8 edges, 1/16 corners).
-    var v = 0.0;
-    for (var dy = -1; dy <= 1; dy += 1) {
-        for (var dx = -1; dx <= 1; dx += 1) {
-            let q = clamp(p + vec2(dx, dy), vec2(0), view_size() - 1);
-            let k = select(0.5, 1.0, dx == 0) * select(0.5, 1.0, dy == 0) * 0.25;
-            v += k * clean(textureLoad(src_a, q, 0)).w;
-        }
-    }
-    let l_sigma = params.svgf2.y * sqrt(max(v, 0.0));
-    // Screen-space depth gradient (central differences, clamped at the border).
-    let zx = textureLoad(src_d, clamp(p + vec2(1, 0), vec2(0), view_size() - 1), 0).x
-        - textureLoad(src_d, clamp(p - vec2(1, 0), vec2(0), view_size() - 1), 0).x;
-    let zy = textureLoad(src_d, clamp(p + vec2(0, 1), vec2(0), view_size() - 1), 0).x
-        - textureLoad(src_d, clamp(p - vec2(0, 1), vec2(0), view_size() - 1), 0).x;
-    let grad = vec2(zx, zy) * 0.5;
+    let cp = clean(textureLoad(src_a, p, 0));
     let s = i32(pass_step.x);
-    let b3 = array<f32, 3>(0.375, 0.25, 0.0625);
-    let lp = lum(centre.rgb);
-    var sum = centre.rgb;
-    var sum_v = centre.w;
+    let aux_p = textureLoad(src_b, p, 0);
+    var sum = cp.rgb;
+    var sum_v = cp.w;
     var wsum = 1.0;
     for (var dy = -2; dy <= 2; dy += 1) {
         for (var dx = -2; dx <= 2; dx += 1) {
@@ -202,11 +234,10 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
             if zq.x <= 0.0 {
                 continue;
             }
+            let aux_q = textureLoad(src_b, q, 0);
             let cq = clean(textureLoad(src_a, q, 0));
-            let off = vec2(f32(dx), f32(dy)) * f32(s);
-            let dz_scaled = params.svgf.w * max(abs(dot(grad, off)), 1.0e-3 * zn.x);
-            let h = b3[abs(dx)] * b3[abs(dy)] / (b3[0] * b3[0]);
-            let w = h * optics_svgf_weight(zq.x - zn.x, dz_scaled, dot(zq.yzw, zn.yzw), params.svgf2.x, lum(cq.rgb) - lp, l_sigma);
+            // q sees p at the opposite offset.
+            let w = atrous_weight(-vec2(dx, dy), zq, zp, cq.rgb, cp.rgb, aux_q, aux_p);
             sum += w * cq.rgb;
             sum_v += w * w * cq.w;
             wsum += w;

@@ -344,6 +344,8 @@ pub struct ImageSpaceViewState {
     pub history: [Tex; 2],
     /// Luminance moments (m1, m2, history length) by parity.
     pub moments: [Tex; 2],
+    /// Per-pixel à-trous data from the prep pass: (0, luminance deviation, depth gradient).
+    pub aux: Tex,
     /// 1x1 placeholders for unused texture slots: one sampled, three storage.
     pub dummy_in: TextureView,
     /// See `dummy_in`.
@@ -481,6 +483,7 @@ impl ImageSpaceViewState {
                 view_tex("caustics:image_space:moments0"),
                 view_tex("caustics:image_space:moments1"),
             ],
+            aux: view_tex("caustics:image_space:atrous_aux"),
             dummy_in: one("caustics:image_space:dummy_in"),
             dummy_out: [
                 one("caustics:image_space:dummy_out0"),
