@@ -160,6 +160,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                         "rsm_resolution" => a.rsm_resolution = f()? as u32,
                         "luminance_cutoff" => a.luminance_cutoff = f()?,
                         "stride" => a.stride = f()? as u32,
+                        "hi_z" => a.hi_z = f()? != 0.0,
                         "thickness" => a.thickness = f()?,
                         "denoise" => a.denoise = f()? != 0.0,
                         "alpha_color" => a.alpha_color = f()?,

@@ -631,8 +631,10 @@ fn stiff_and_extreme_cases_gpu() {
             height: 32,
             photons: Some(case.photons.min(1 << 14)),
             frames: 4,
+            // Odd cases march the Hi-Z pyramids.
             image_space: bevy_caustics::ImageSpaceSettings {
                 rsm_resolution: 64,
+                hi_z: i % 2 == 1,
                 ..Default::default()
             },
             ..Default::default()

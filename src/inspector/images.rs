@@ -23,6 +23,7 @@ use bevy::render::texture::GpuImage;
 use bevy::render::{RenderApp, RenderStartup};
 
 use crate::render::aaps::view::AapsViewState;
+use crate::render::image_space::view::ImageSpaceViewState;
 use crate::render::volume::gpu::tile_stride;
 use crate::render::volume::view::VolumeStore;
 use crate::render::{ExtractedCaustics, ViewCausticsBuffer};
@@ -49,17 +50,27 @@ pub enum LiveKind {
     SlabGBuffer,
     /// Volume: photons per density tile of one exit face's projector.
     ProjectorTiles,
+    /// Image space: one RSM layer (opaque, caster front, caster back of light view k are
+    /// 3k, 3k + 1, 3k + 2), its normals as colours, black where empty.
+    RsmLayer,
+    /// Image space: this frame's raw photon map (lux), before the denoiser.
+    PhotonMap,
+    /// Image space: the denoiser's colour history (lux).
+    SvgfHistory,
 }
 
 impl LiveKind {
     /// All kinds, in the panel's order.
-    pub const ALL: [LiveKind; 6] = [
+    pub const ALL: [LiveKind; 9] = [
         Self::Caustics,
         Self::Density,
         Self::Area,
         Self::Variance,
         Self::SlabGBuffer,
         Self::ProjectorTiles,
+        Self::RsmLayer,
+        Self::PhotonMap,
+        Self::SvgfHistory,
     ];
 
     /// Label.
@@ -71,16 +82,19 @@ impl LiveKind {
             Self::Variance => "AAPS variance",
             Self::SlabGBuffer => "volume slab G-buffer (normals)",
             Self::ProjectorTiles => "volume projector density tiles",
+            Self::RsmLayer => "image-space RSM layer (normals)",
+            Self::PhotonMap => "image-space raw photon map",
+            Self::SvgfHistory => "image-space SVGF history",
         }
     }
 
     /// Unit of the legend.
     pub fn unit(self) -> &'static str {
         match self {
-            Self::Caustics => "lx",
+            Self::Caustics | Self::PhotonMap | Self::SvgfHistory => "lx",
             Self::Density => "photons",
             Self::Area => "px",
-            Self::Variance | Self::SlabGBuffer => "",
+            Self::Variance | Self::SlabGBuffer | Self::RsmLayer => "",
             Self::ProjectorTiles => "photons",
         }
     }
@@ -88,7 +102,8 @@ impl LiveKind {
     /// The legend's default range (log scale).
     pub fn default_range(self) -> (f32, f32) {
         match self {
-            Self::Caustics => (100.0, 1.0e6),
+            Self::Caustics | Self::PhotonMap | Self::SvgfHistory => (100.0, 1.0e6),
+            Self::RsmLayer => (1.0, 2.0),
             Self::Density => (0.1, 1.0e3),
             Self::Area => (0.01, 100.0),
             Self::Variance => (1.0e-4, 10.0),
@@ -97,8 +112,22 @@ impl LiveKind {
         }
     }
 
+    /// The shader's path: 0 a texture's luminance, 1 to 3 AAPS fields, 4 a G-buffer layer's
+    /// normals, 5 density tiles.
     fn code(self) -> u32 {
-        self as u32
+        match self {
+            Self::Caustics | Self::PhotonMap | Self::SvgfHistory => 0,
+            Self::Density => 1,
+            Self::Area => 2,
+            Self::Variance => 3,
+            Self::SlabGBuffer | Self::RsmLayer => 4,
+            Self::ProjectorTiles => 5,
+        }
+    }
+
+    /// Whether the image shows a G-buffer layer's normals (no legend).
+    pub fn is_normals(self) -> bool {
+        self.code() == 4
     }
 }
 
@@ -130,6 +159,8 @@ pub struct InspectorImages {
     pub slab_layer: u32,
     /// The exit face whose projector tiles are shown (`volume::frame::face_code`).
     pub face: u32,
+    /// The image-space RSM layer shown (3k + 0 opaque, 1 caster front, 2 caster back).
+    pub rsm_layer: u32,
 }
 
 impl ExtractResource for InspectorImages {
@@ -226,12 +257,14 @@ fn init_pipeline(
 }
 
 /// Colour-map the shown images of the inspected view.
+#[allow(clippy::type_complexity)]
 fn colour_map_pass(
     view: ViewQuery<(
         &MainEntity,
         &ViewCausticsBuffer,
         &ExtractedCaustics,
         Option<&AapsViewState>,
+        Option<&ImageSpaceViewState>,
     )>,
     volumes: Option<Res<VolumeStore>>,
     images: Option<Res<InspectorImages>>,
@@ -240,7 +273,7 @@ fn colour_map_pass(
     gpu_images: Res<RenderAssets<GpuImage>>,
     mut ctx: RenderContext,
 ) {
-    let (main, buffer, _, aaps) = view.into_inner();
+    let (main, buffer, _, aaps, image_space) = view.into_inner();
     let (Some(images), Some(pipeline)) = (images, pipeline) else {
         return;
     };
@@ -289,6 +322,27 @@ fn colour_map_pass(
                 let side = v.key.projector.div_ceil(v.key.tile.max(1));
                 let offset = images.face.min(5) as u64 * tile_stride(&v.key);
                 (&buffer.view, &v.tiles, empty, side, buffer.size, offset)
+            }
+            LiveKind::RsmLayer => {
+                let Some(s) = image_space else { continue };
+                let Some(layer) = s
+                    .rsm_layers
+                    .get(images.rsm_layer as usize)
+                    .or(s.rsm_layers.last())
+                else {
+                    continue;
+                };
+                (layer, empty, empty, 0, UVec2::splat(s.key.rsm), 0)
+            }
+            LiveKind::PhotonMap => {
+                let Some(s) = image_space else { continue };
+                (&s.raw.1, empty, empty, 0, s.key.size, 0)
+            }
+            LiveKind::SvgfHistory => {
+                let Some(s) = image_space else { continue };
+                // Written this frame, at the parity the passes used (`frame & 1`).
+                let cur = (s.frame & 1) as usize;
+                (&s.history[cur].1, empty, empty, 0, s.key.size, 0)
             }
         };
         let mut params = [0u8; 32];

@@ -512,6 +512,18 @@ fn live_images(
                         .on_hover_text("layer: G_near of slab k is 2k, G_far 2k + 1");
                     live.slab_layer = k;
                 }
+                LiveKind::RsmLayer if image.shown => {
+                    const LAYERS: [&str; 3] = ["opaque", "caster front", "caster back"];
+                    let k = live.rsm_layer;
+                    egui::ComboBox::from_id_salt("caustics_rsm_layer")
+                        .selected_text(format!("light {} {}", k / 3, LAYERS[(k % 3) as usize]))
+                        .show_ui(ui, |ui| {
+                            for l in 0..12 {
+                                let text = format!("light {} {}", l / 3, LAYERS[(l % 3) as usize]);
+                                ui.selectable_value(&mut live.rsm_layer, l, text);
+                            }
+                        });
+                }
                 LiveKind::ProjectorTiles if image.shown => {
                     egui::ComboBox::from_id_salt("caustics_tiles_face")
                         .selected_text(FACES[live.face.min(5) as usize])
@@ -529,7 +541,7 @@ fn live_images(
             let w = ui.available_width().min(size.x as f32 * 1.4);
             let h = w * size.y as f32 / size.x as f32;
             ui.image(egui::load::SizedTexture::new(*id, [w, h]));
-            if image.kind != LiveKind::SlabGBuffer {
+            if !image.kind.is_normals() {
                 legend(ui, image);
             }
         }

@@ -107,6 +107,61 @@ fn image_space_energy_matches_reference() {
     }
 }
 
+/// The Hi-Z march finds the same caustics as the linear march: `mirror_wall` within 10 % of
+/// its closed form, `glass_sphere` and `ring` within 10 % of the reference's energy; the trace
+/// pass's median GPU time with each is printed for the note.
+#[test]
+fn image_space_hi_z_matches_linear() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let [(mirror, n, d, region, expect), _] = closed_form_cases();
+    for name in ["mirror_wall", "glass_sphere", "ring"] {
+        let mut ms = [0.0; 2];
+        for (k, hi_z) in [false, true].into_iter().enumerate() {
+            let report = image_space(RenderJob {
+                scene: scene(name),
+                frames: FRAMES,
+                image_space: ImageSpaceSettings {
+                    hi_z,
+                    ..settings(true)
+                },
+                ..Default::default()
+            });
+            let trace = report.pass_ms["caustics/image_space/trace"];
+            let hiz = report.pass_ms.get("caustics/image_space/hiz").copied();
+            ms[k] = trace + hiz.unwrap_or(0.0);
+            let img = report.caustics.expect("caustics");
+            if hi_z {
+                assert!(hiz.is_some(), "{name}: no Hi-Z pass timed");
+                if name == "mirror_wall" {
+                    let (_, _, cam) = mirror.to_trace(128, 128);
+                    let (mean, _) = plane_region_mean(&img, &cam, n, d, region);
+                    let err = mean / expect - 1.0;
+                    println!("{name} (Hi-Z): closed-form error {:+.2} %", err * 100.0);
+                    assert!(err.abs() < 0.10, "{name}: {:+.2} %", err * 100.0);
+                } else {
+                    let m = compare(&img, &reference(name), None).expect("same size");
+                    println!(
+                        "{name} (Hi-Z): energy error {:+.2} %, RMSE {:.1} lx, FLIP {:.4}",
+                        m.energy_error * 100.0,
+                        m.rmse,
+                        m.flip
+                    );
+                    assert!(m.energy_error.abs() < 0.10, "{name}: {m:?}");
+                }
+            }
+        }
+        println!(
+            "{name}: trace (+ pyramids) {:.2} ms linear, {:.2} ms Hi-Z: {:.2}x",
+            ms[0],
+            ms[1],
+            ms[0] / ms[1]
+        );
+    }
+}
+
 /// Relative change between consecutive frames: `Σ|L_t − L_{t−1}| / Σ L_t` of luminance.
 fn frame_change(a: &CausticImage, b: &CausticImage) -> f64 {
     let (mut d, mut s) = (0.0f64, 0.0f64);

@@ -26,6 +26,8 @@ pub const RSM_PASSES: [&str; 3] = [
     "caustics/image_space/rsm_front",
     "caustics/image_space/rsm_back",
 ];
+/// The nearest-depth pyramids (with `hi_z`).
+pub const HIZ_PASS: &str = "caustics/image_space/hiz";
 /// Photon generation, both marches and the deposit.
 pub const TRACE_PASS: &str = "caustics/image_space/trace";
 /// Photon map to irradiance, depth and normal for the denoiser.
@@ -38,10 +40,11 @@ pub const VARIANCE_PASS: &str = "caustics/image_space/variance";
 pub const ATROUS_PASS: &str = "caustics/image_space/atrous";
 
 /// Every pass, for diagnostics readers.
-pub const ALL_PASSES: [&str; 8] = [
+pub const ALL_PASSES: [&str; 9] = [
     RSM_PASSES[0],
     RSM_PASSES[1],
     RSM_PASSES[2],
+    HIZ_PASS,
     TRACE_PASS,
     RESOLVE_PASS,
     TEMPORAL_PASS,
@@ -119,6 +122,7 @@ impl Ctx<'_> {
                 slots.out[1],
                 slots.out[2],
                 small(&s.steps),
+                s.hiz.as_entire_binding(),
             )),
         )
     }
@@ -230,17 +234,31 @@ pub fn image_space_passes(
             ([(l as u64 * LIGHT_STRIDE) as u32, 0], photon_groups(n))
         })
         .collect();
+    if state.settings.hi_z {
+        let h = state.hiz_layout;
+        let mut dispatches = Vec::new();
+        for plane in 0..h.planes {
+            let size0 = if plane == 0 {
+                state.key.size
+            } else {
+                UVec2::splat(state.key.rsm)
+            };
+            for level in 0..h.levels(plane) {
+                let size = (size0 + UVec2::splat((1 << level) - 1)) >> level;
+                let step = (super::view::HizLayout::step(plane, level) * SMALL_STRIDE) as u32;
+                dispatches.push(([0, step], [size.x.div_ceil(8), size.y.div_ceil(8), 1]));
+            }
+        }
+        compute_pass(&mut ctx, HIZ_PASS, compute[6], &group, &dispatches);
+        log.record(HIZ_PASS);
+    }
     compute_pass(&mut ctx, TRACE_PASS, compute[0], &group, &per_light);
     log.record(TRACE_PASS);
     let parity = (state.frame & 1) as usize;
     let (cur, prev) = (parity, 1 - parity);
     let denoise = state.settings.denoise;
-    // Resolve: the raw photon map into filter[0] (or straight into the caustics buffer).
-    let raw_out = if denoise {
-        &state.filter[0].1
-    } else {
-        &buffer.view
-    };
+    // Resolve: the raw photon map (or straight into the caustics buffer).
+    let raw_out = if denoise { &state.raw.1 } else { &buffer.view };
     let group = c.group(
         &ctx,
         Slots {
@@ -272,7 +290,7 @@ pub fn image_space_passes(
     debug_assert!(IMAGE_SPACE_COUNTERS.len() as u64 <= COUNTER_WORDS);
 }
 
-/// SVGF: temporal (filter[0] → filter[1], moments), variance (filter[1] → filter[0]), then
+/// SVGF: temporal (raw → filter[1], moments), variance (filter[1] → filter[0]), then
 /// the à-trous iterations ping-ponging, the last one into the caustics buffer.
 fn svgf_passes(
     ctx: &mut RenderContext,
@@ -290,7 +308,7 @@ fn svgf_passes(
         ctx,
         Slots {
             src: [
-                &s.filter[0].1,
+                &s.raw.1,
                 &s.history[prev].1,
                 &s.moments[prev].1,
                 &s.zn[prev].1,

@@ -44,13 +44,14 @@ pub struct ImageSpaceShaders {
 }
 
 /// The compute entry points, in [`ImageSpacePipelines::compute`] order.
-pub const COMPUTE_ENTRIES: [&str; 6] = [
+pub const COMPUTE_ENTRIES: [&str; 7] = [
     "trace",
     "resolve",
     "temporal",
     "variance",
     "atrous_prep",
     "atrous",
+    "hiz_build",
 ];
 
 /// Layouts and pipeline ids.
@@ -61,7 +62,7 @@ pub struct ImageSpacePipelines {
     /// Group 0 of the RSM passes.
     pub rsm_layout: BindGroupLayoutDescriptor,
     /// [`COMPUTE_ENTRIES`].
-    pub compute: [CachedComputePipelineId; 6],
+    pub compute: [CachedComputePipelineId; 7],
     /// Opaque, caster-front and caster-back RSM layers.
     pub rsm: [CachedRenderPipelineId; 3],
 }
@@ -95,6 +96,7 @@ pub(super) fn init_image_space_pipelines(
                 out(),
                 out(),
                 uniform_buffer_sized(true, None),
+                storage_buffer_sized(false, None),
             ),
         ),
     );

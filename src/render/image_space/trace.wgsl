@@ -23,6 +23,9 @@ struct IsParams {
     knobs: vec4<f32>,   // thickness, luminance cutoff, scene scale (m), stride (texels)
     svgf: vec4<f32>,    // alpha colour, alpha moments, history cap, sigma_z
     svgf2: vec4<f32>,   // sigma_n, sigma_l, 0, 0
+    hiz: vec4<u32>,     // camera levels, RSM levels, words per RSM plane, first RSM plane's word
+    cam_mips: array<vec4<u32>, 4>,  // word offset of camera level L (L < 16)
+    rsm_mips: array<vec4<u32>, 4>,  // word offset of RSM level L within a plane
 }
 
 struct IsLight {
@@ -36,6 +39,7 @@ const FLAG_DENOISE: u32 = 1u;
 const FLAG_RESET: u32 = 2u;
 const FLAG_HISTORY: u32 = 4u;   // the pass writes the colour history (step uniform)
 const FLAG_LAST: u32 = 8u;      // the pass writes the caustics buffer (step uniform)
+const FLAG_HIZ: u32 = 16u;      // the marches use the nearest-depth pyramids
 
 @group(0) @binding(0) var<uniform> params: IsParams;
 @group(0) @binding(1) var<uniform> light: IsLight;
@@ -52,6 +56,7 @@ const FLAG_LAST: u32 = 8u;      // the pass writes the caustics buffer (step uni
 @group(0) @binding(12) var out_a: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(13) var out_b: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(14) var out_c: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(16) var<storage, read_write> hiz: array<f32>;
 @group(0) @binding(15) var<uniform> pass_step: vec4<u32>;  // step (px), flags (FLAG_*), iteration, 0
 
 // Counter words (`IMAGE_SPACE_COUNTERS` in src/render/image_space/passes.rs).
@@ -142,6 +147,67 @@ fn scene_depth(mode: u32, p: vec2<i32>) -> f32 {
     return select(-1.0, t.x, t.w != 0.0);
 }
 
+// Hi-Z: nearest-depth pyramids in one buffer. Plane 0 is the camera's view depth; plane
+// 1 + 2 l (2 + 2 l) light l's opaque (caster-back) layer. Empty texels hold 3e38.
+const HIZ_EMPTY: f32 = 3.0e38;
+
+fn hiz_size(plane: u32, level: u32) -> vec2<u32> {
+    var size0 = vec2<u32>(params.camera.size.xy);
+    if plane > 0u {
+        size0 = vec2(u32(light_res()));
+    }
+    let step = (1u << level) - 1u;
+    return max((size0 + vec2(step)) >> vec2(level), vec2(1u));
+}
+
+// The RSM side (the light uniform holds it; the camera passes read it from hiz.w's plane).
+fn light_res() -> f32 {
+    return light.misc.z;
+}
+
+fn hiz_offset(plane: u32, level: u32) -> u32 {
+    if plane == 0u {
+        return params.cam_mips[level / 4u][level % 4u];
+    }
+    return params.hiz.w + (plane - 1u) * params.hiz.z + params.rsm_mips[level / 4u][level % 4u];
+}
+
+fn hiz_fetch(plane: u32, level: u32, cell: vec2<i32>) -> f32 {
+    let size = hiz_size(plane, level);
+    let c = clamp(vec2<u32>(max(cell, vec2(0))), vec2(0u), size - 1u);
+    return hiz[hiz_offset(plane, level) + c.y * size.x + c.x];
+}
+
+// One level of one plane: level 0 from the depth (camera) or the RSM layer, the others the
+// minimum of 2x2 cells of the level below. pass_step = (level, plane, _, _).
+@compute @workgroup_size(8, 8)
+fn hiz_build(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let level = pass_step.x;
+    let plane = pass_step.y;
+    let size = hiz_size(plane, level);
+    if gid.x >= size.x || gid.y >= size.y {
+        return;
+    }
+    let p = vec2<i32>(gid.xy);
+    var z = HIZ_EMPTY;
+    if level == 0u {
+        if plane == 0u {
+            let d = camera_depth(p);
+            z = select(HIZ_EMPTY, d, d > 0.0);
+        } else {
+            let l = (plane - 1u) / 2u;
+            let layer = i32(3u * l + select(0u, 2u, (plane - 1u) % 2u == 1u));
+            let t = textureLoad(rsm, p, layer, 0);
+            z = select(HIZ_EMPTY, t.x, t.w != 0.0);
+        }
+    } else {
+        for (var k = 0; k < 4; k += 1) {
+            z = min(z, hiz_fetch(plane, level - 1u, 2 * p + vec2(k & 1, k >> 1)));
+        }
+    }
+    hiz[hiz_offset(plane, level) + gid.y * size.x + gid.x] = z;
+}
+
 struct MarchResult {
     hit: bool,
     pos: vec3<f32>,   // the crossing (hit) or the last point inside the view (miss)
@@ -210,6 +276,15 @@ fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max_in: f32) -> 
     let q0 = p0 * k0;
     let q1 = p1 * k1;
     let thick = params.knobs.x;
+    if (params.frame.w & FLAG_HIZ) != 0u {
+        var plane = 0u;
+        var levels = params.hiz.x;
+        if mode != 0u {
+            plane = 1u + 2u * (u32(light.misc.w) / 3u) + select(0u, 1u, mode == 2u);
+            levels = params.hiz.y;
+        }
+        return march_hiz(v, plane, levels, r, s0, s1, k0, k1, q0, q1, a, b);
+    }
     // Steps of `stride` pixels, and small enough in depth that no step moves the ray by more
     // than half the thickness (a ray nearly along the view axis crosses few pixels but much
     // depth, and would jump through every surface).
@@ -245,6 +320,68 @@ fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max_in: f32) -> 
     let pv = mix(q0, q1, b) / mix(k0, k1, b);
     r.pos = (v.world_from_view * vec4(pv, 1.0)).xyz;
     r.px = px_prev;
+    return r;
+}
+
+// The hierarchical march (Uludag 2014; here a conservative variant valid for rays in any
+// direction): the cell of the current level holding the ray's pixel is skipped whole when
+// the ray's depth over its part of the segment (exact: depth is monotonic along it) stays in
+// front of the cell's nearest surface, and the march climbs a level; otherwise it descends,
+// and at level 0 tests the pixel: a hit when the ray reaches the pixel's depth inside it and
+// entered no deeper than the thickness behind it (eq. 2 with a flat pixel).
+fn march_hiz(v: SpaceView, plane: u32, levels: u32, r_in: MarchResult, s0: vec2<f32>, s1: vec2<f32>, k0: f32, k1: f32, q0: vec3<f32>, q1: vec3<f32>, a: f32, b: f32) -> MarchResult {
+    var r = r_in;
+    let ds = s1 - s0;
+    let len = max(length(ds), 1.0e-6);
+    let eps = 1.0e-3 / len;
+    let thick = params.knobs.x;
+    var s = a;
+    var level = min(2u, levels - 1u);
+    for (var iter = 0u; iter < 4096u; iter += 1u) {
+        if s >= b {
+            break;
+        }
+        let scale = f32(1u << level);
+        let p = mix(s0, s1, s);
+        let cell = vec2<i32>(floor(p / scale));
+        var s_exit = b;
+        for (var i = 0; i < 2; i += 1) {
+            if ds[i] > 1.0e-9 {
+                s_exit = min(s_exit, (f32(cell[i] + 1) * scale - s0[i]) / ds[i]);
+            } else if ds[i] < -1.0e-9 {
+                s_exit = min(s_exit, (f32(cell[i]) * scale - s0[i]) / ds[i]);
+            }
+        }
+        s_exit = clamp(s_exit, s, b);
+        let z_in = -mix(q0, q1, s).z / mix(k0, k1, s);
+        let z_out = -mix(q0, q1, s_exit).z / mix(k0, k1, s_exit);
+        let nearest = hiz_fetch(plane, level, cell);
+        if max(z_in, z_out) < nearest {
+            s = s_exit + eps;
+            level = min(level + 1u, levels - 1u);
+            continue;
+        }
+        if level > 0u {
+            level -= 1u;
+            continue;
+        }
+        let zs = nearest;
+        if zs < HIZ_EMPTY && z_out >= zs && z_in <= zs * (1.0 + thick) {
+            let u = clamp((zs - z_in) / (z_out - z_in), 0.0, 1.0);
+            let sc = select(mix(s, s_exit, u), s, !(u == u));
+            let pv = mix(q0, q1, sc) / mix(k0, k1, sc);
+            r.hit = true;
+            r.pos = (v.world_from_view * vec4(pv, 1.0)).xyz;
+            r.px = cell;
+            return r;
+        }
+        s = s_exit + eps;
+        level = min(1u, levels - 1u);
+    }
+    let e = min(s, b);
+    let pv = mix(q0, q1, e) / mix(k0, k1, e);
+    r.pos = (v.world_from_view * vec4(pv, 1.0)).xyz;
+    r.px = vec2<i32>(floor(mix(s0, s1, e)));
     return r;
 }
 

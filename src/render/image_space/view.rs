@@ -24,8 +24,80 @@ pub const LIGHT_STRIDE: u64 = 512;
 pub const SMALL_STRIDE: u64 = 256;
 /// Counter words (`C_*` in trace.wgsl).
 pub const COUNTER_WORDS: u64 = 32;
-/// Filter-step uniforms: the variance pass and at most 8 à-trous iterations.
+/// Filter-step uniforms: the variance pass and at most 8 à-trous iterations; then
+/// [`MAX_MIPS`] Hi-Z build steps per plane.
 pub const STEPS: u64 = 9;
+/// Most levels of a Hi-Z pyramid (a 32 768² view).
+pub const MAX_MIPS: usize = 16;
+
+/// The levels of a nearest-depth pyramid over `size`: their count and word offsets, and the
+/// words of the whole pyramid. Level L is `ceil(size / 2^L)`, down to 1x1.
+pub fn hiz_levels(size: UVec2) -> (u32, [u32; MAX_MIPS], u32) {
+    let mut offsets = [0u32; MAX_MIPS];
+    let mut words = 0u32;
+    let mut n = 0;
+    let mut s = size.max(UVec2::ONE);
+    loop {
+        offsets[n] = words;
+        words += s.x * s.y;
+        n += 1;
+        if (s.x == 1 && s.y == 1) || n == MAX_MIPS {
+            break;
+        }
+        s = (s + UVec2::ONE) / 2;
+    }
+    (n as u32, offsets, words)
+}
+
+/// Where the Hi-Z pyramids live in their buffer (plane 0 the camera's, then per light view
+/// its opaque and caster-back layers').
+#[derive(Clone, Copy, Debug)]
+pub struct HizLayout {
+    /// Camera levels and offsets.
+    pub camera: (u32, [u32; MAX_MIPS]),
+    /// RSM levels and offsets within a plane.
+    pub rsm: (u32, [u32; MAX_MIPS]),
+    /// Words per RSM plane.
+    pub plane_words: u32,
+    /// First RSM plane's word.
+    pub rsm_base: u32,
+    /// Planes (1 + 2 per light view).
+    pub planes: u32,
+}
+
+impl HizLayout {
+    /// The layout for `key`.
+    pub fn new(key: &ImageSpaceKey) -> Self {
+        let (cl, co, cw) = hiz_levels(key.size);
+        let (rl, ro, rw) = hiz_levels(UVec2::splat(key.rsm));
+        Self {
+            camera: (cl, co),
+            rsm: (rl, ro),
+            plane_words: rw,
+            rsm_base: cw,
+            planes: 1 + 2 * key.lights,
+        }
+    }
+
+    /// Words of the buffer.
+    pub fn words(&self) -> u64 {
+        self.rsm_base as u64 + (self.planes as u64 - 1) * self.plane_words as u64
+    }
+
+    /// Levels of `plane`.
+    pub fn levels(&self, plane: u32) -> u32 {
+        if plane == 0 {
+            self.camera.0
+        } else {
+            self.rsm.0
+        }
+    }
+
+    /// Index of the steps-buffer entry of (`plane`, `level`).
+    pub fn step(plane: u32, level: u32) -> u64 {
+        STEPS + plane as u64 * MAX_MIPS as u64 + level as u64
+    }
+}
 
 /// A view of the scene from a light or the camera, as `SpaceView` in trace.wgsl.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -336,7 +408,9 @@ pub struct ImageSpaceViewState {
     pub map: Buffer,
     /// Counters.
     pub counters: Buffer,
-    /// Filter ping-pong (the raw photon map and the temporal result live here too).
+    /// This frame's raw photon map (lux).
+    pub raw: Tex,
+    /// Filter ping-pong (the temporal result lives here too).
     pub filter: [Tex; 2],
     /// View depth and normal, this frame's and last frame's (by parity).
     pub zn: [Tex; 2],
@@ -350,6 +424,10 @@ pub struct ImageSpaceViewState {
     pub dummy_in: TextureView,
     /// See `dummy_in`.
     pub dummy_out: [TextureView; 3],
+    /// Hi-Z pyramids (f32 words, [`HizLayout`]).
+    pub hiz: Buffer,
+    /// Their layout.
+    pub hiz_layout: HizLayout,
     /// `IsParams`.
     pub params: Buffer,
     /// `IsLight` per light, [`LIGHT_STRIDE`] apart.
@@ -467,6 +545,7 @@ impl ImageSpaceViewState {
             rsm_depth,
             map: storage("caustics:image_space:photon_map", pixels * 24),
             counters: storage("caustics:image_space:counters", COUNTER_WORDS * 4),
+            raw: view_tex("caustics:image_space:raw"),
             filter: [
                 view_tex("caustics:image_space:filter0"),
                 view_tex("caustics:image_space:filter1"),
@@ -490,7 +569,9 @@ impl ImageSpaceViewState {
                 one("caustics:image_space:dummy_out1"),
                 one("caustics:image_space:dummy_out2"),
             ],
-            params: uniform(device, "caustics:image_space:params", 512),
+            hiz: storage("caustics:image_space:hiz", HizLayout::new(&key).words() * 4),
+            hiz_layout: HizLayout::new(&key),
+            params: uniform(device, "caustics:image_space:params", 1024),
             lights: uniform(
                 device,
                 "caustics:image_space:lights",
@@ -501,7 +582,11 @@ impl ImageSpaceViewState {
                 "caustics:image_space:rsm_views",
                 SMALL_STRIDE * key.lights.max(1) as u64,
             ),
-            steps: uniform(device, "caustics:image_space:steps", SMALL_STRIDE * STEPS),
+            steps: uniform(
+                device,
+                "caustics:image_space:steps",
+                SMALL_STRIDE * HizLayout::step(1 + 2 * key.lights.max(1), 0),
+            ),
             frame: 0,
             generation: None,
             prev_clip_from_world: None,
@@ -543,6 +628,8 @@ pub const FLAG_RESET: u32 = 2;
 pub const FLAG_HISTORY: u32 = 4;
 /// Step flag: the pass writes the caustics buffer.
 pub const FLAG_LAST: u32 = 8;
+/// The marches use the Hi-Z pyramids.
+pub const FLAG_HIZ: u32 = 16;
 
 /// Create or resize each image-space view's state and write the frame's uniforms.
 #[allow(clippy::type_complexity)]
@@ -642,7 +729,9 @@ fn write_uniforms(
         crate::optics::pcg_hash(frame.wrapping_mul(2) ^ 0x5bd1_e995),
         crate::optics::pcg_hash(frame.wrapping_mul(2) + 1),
     ];
-    let flags = (if s.denoise { FLAG_DENOISE } else { 0 }) | (if reset { FLAG_RESET } else { 0 });
+    let flags = (if s.denoise { FLAG_DENOISE } else { 0 })
+        | (if reset { FLAG_RESET } else { 0 })
+        | (if s.hi_z { FLAG_HIZ } else { 0 });
     let mut b = camera.bytes();
     push(&mut b, &prev.to_cols_array());
     b.extend(
@@ -669,11 +758,26 @@ fn write_uniforms(
         ],
     );
     push(&mut b, &[s.sigma_normal, s.sigma_luminance, 0.0, 0.0]);
-    b.resize(512, 0);
+    let h = state.hiz_layout;
+    let words = [h.camera.0, h.rsm.0, h.plane_words, h.rsm_base]
+        .into_iter()
+        .chain(h.camera.1)
+        .chain(h.rsm.1);
+    b.extend(words.flat_map(|x| x.to_le_bytes()));
+    b.resize(1024, 0);
     queue.write_buffer(&state.params, 0, &b);
     // Steps: 0 the variance pass, 1 + i the à-trous iteration i.
     let n = s.atrous_iterations;
-    let mut steps = vec![0u8; (SMALL_STRIDE * STEPS) as usize];
+    let entries = HizLayout::step(state.hiz_layout.planes, 0);
+    let mut steps = vec![0u8; (SMALL_STRIDE * entries) as usize];
+    for plane in 0..state.hiz_layout.planes {
+        for level in 0..MAX_MIPS as u32 {
+            let at = (HizLayout::step(plane, level) * SMALL_STRIDE) as usize;
+            for (i, v) in [level, plane, 0, 0].iter().enumerate() {
+                steps[at + 4 * i..at + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
     for k in 0..STEPS as u32 {
         let mut flags = 0;
         if k == n {
