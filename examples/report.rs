@@ -202,7 +202,7 @@ fn real_main() -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores). `gpu ms` is the sum of the median GPU times of the caustics passes over the measured frames (12 frames; AAPS's task buffer adapts during them, from a uniform start); the last column lists each pass. AAPS quality levels: photon budget per light (a ceiling) and target splat area; `splats` counts the splats drawn in the last frame.\n"
+        "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores). `gpu ms` is the sum of the median GPU times of the caustics passes over the measured frames (12 frames; AAPS's task buffer adapts during them, from a uniform start); the last column lists each pass. AAPS quality levels: photon budget per light (a ceiling) and target splat area; `splats` counts the splats drawn in the last frame. Image-space quality levels: photons per light and frame (`photons` counts those that started on a caster texel) and the side of the reflective shadow maps, with the default settings (Hi-Z march, SVGF).\n"
     );
     let _ = writeln!(
         md,

@@ -28,8 +28,10 @@ pub struct ImageSpaceSettings {
     pub stride: u32,
     /// March through nearest-depth pyramids (Hi-Z) of the light's layers and the camera's
     /// depth instead of texel by texel: cells whose nearest surface lies behind the ray are
-    /// skipped whole. Default false (see the module doc of `render::image_space` for the
-    /// measured ratio). Cost: one pyramid build per plane and frame (a third of a full-screen
+    /// skipped whole. Default true: at the default 1024² maps on lavapipe the trace pass is
+    /// 4.9x (`glass_sphere`) and 6x (`mirror_wall`) faster with it, pyramids included, for
+    /// the same error (RMSE 123 against 121 lx, energy within 0.2 %); at 256² maps it is 1.8x
+    /// to 2.6x faster and flat cells cost some precision (RMSE 227 against 169 lx). Cost: one pyramid build per plane and frame (a third of a full-screen
     /// pass); the marches take O(log n) steps over empty space instead of O(n).
     pub hi_z: bool,
     /// Thickness assumed behind every depth sample, as a fraction of its depth: a march step
@@ -67,8 +69,9 @@ pub struct ImageSpaceSettings {
     pub sigma_luminance: f32,
     /// Drop the denoiser's history when the scene's caustics change (a caster, a receiver or a
     /// light moved or changed): motion vectors are zero where a caustic moves over a still
-    /// floor, so history would smear it. Default true (ours; see the module doc of
-    /// `render::image_space` for what was measured against clamping).
+    /// floor, so history would smear it. Default true (ours; measured in the module doc of
+    /// `render::image_space`: within 7 % of the settled error 4 frames after the sun turns,
+    /// where the kept history is still 3x above it after 8).
     pub reset_on_change: bool,
 }
 
@@ -78,7 +81,7 @@ impl Default for ImageSpaceSettings {
             rsm_resolution: 1024,
             luminance_cutoff: 0.04,
             stride: 1,
-            hi_z: false,
+            hi_z: true,
             thickness: 0.02,
             denoise: true,
             alpha_color: 0.2,

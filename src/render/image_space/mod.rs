@@ -23,6 +23,19 @@
 //!    map is the same whatever order the photons land in).
 //! 5. **SVGF** into the caustics buffer, the history dropped when the scene's caustics change.
 //!
+//! Measured on lavapipe (128², 2^16 photons per light, 256² maps, `tests/gpu/image_space.rs`):
+//! - history reset on change against keeping it, the sun turned back by 8 degrees at frame 12
+//!   on `glass_sphere` (settled RMSE 249 lx): with the reset 523, 577, 627, then 266, 252 ...
+//!   lx; kept, 1700, 1450, 1268, ... 771 lx after 8 frames. A-SVGF gradients or history
+//!   clamping were not built: the reset is exact for the cause we know (the scene changed) and
+//!   costs nothing when nothing changes.
+//! - Hi-Z against the linear march (so Hi-Z is the default): at 1024² maps and 2^18 photons
+//!   the trace pass with the pyramids is 4.9x (`glass_sphere`, 853 → 175 ms) and 6x
+//!   (`mirror_wall`, 688 → 114 ms) faster for the same error; at 256² maps 2.6x, 1.8x and
+//!   1.9x (`ring`), energy within 1 %, RMSE on `glass_sphere` 227 against 169 lx.
+//! - Symmetric à-trous luminance weights against SVGF's own (the centre pixel's deviation):
+//!   energy on `ring` −7.7 % against −30 %, RMSE on `glass_sphere` 169 against 242 lx.
+//!
 //! Readings of the paper we chose (each in the doc of the code that implements it):
 //! - Casters are invisible to the marches (the opaque layers hold receivers only), as the
 //!   paper's opaque-only depth buffers hold no refractive surface; mirrors are casters too.
