@@ -71,6 +71,23 @@ fn closed_form_cases() -> [ClosedForm; 2] {
     ]
 }
 
+/// `glass_sphere` with its light made a spot aimed away from every caster, written as glTF
+/// under `dir`: the path. No technique may dispatch a pass for it.
+fn spot_away_scene(dir: &Path) -> PathBuf {
+    use bevy_caustics::scenes;
+    let mut away = scenes::glass_sphere();
+    away.name = "spot_away".into();
+    away.lights[0].kind = scenes::LightKind::Spot {
+        candela: 5000.0,
+        inner: 0.2,
+        outer: 0.3,
+    };
+    away.lights[0].translation = glam::Vec3::new(0.0, 3.0, 0.0);
+    away.lights[0].rotation = scenes::shine_along(glam::Vec3::Y);
+    scenes::gltf::write_gltf(&away, dir).unwrap();
+    dir.join("spot_away.gltf")
+}
+
 fn require_gpu() -> bool {
     match find_adapter() {
         Ok(name) => {

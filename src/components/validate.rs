@@ -209,22 +209,29 @@ pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
     fixes
 }
 
+/// One [`Fix`] per listed field where `fixed` differs from `old`.
+macro_rules! field_fixes {
+    ($old:expr, $fixed:expr, $($f:ident),* $(,)?) => {{
+        let mut fixes: Vec<Fix> = Vec::new();
+        $(
+            if $fixed.$f != $old.$f {
+                fixes.push((
+                    stringify!($f),
+                    format!("{:?} is out of range; clamped to {:?}", $old.$f, $fixed.$f),
+                ));
+            }
+        )*
+        fixes
+    }};
+}
+
 /// Clamp AAPS settings into range (see [`AapsSettings::sanitized_for`]); returns what was
 /// fixed, one entry per field that changed.
 pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> {
     let fixed = a.sanitized_for(limits);
-    let mut fixes = Vec::new();
-    macro_rules! check {
-        ($($f:ident),*) => {$(
-            if fixed.$f != a.$f {
-                fixes.push((
-                    stringify!($f),
-                    format!("{:?} is out of range; clamped to {:?}", a.$f, fixed.$f),
-                ));
-            }
-        )*};
-    }
-    check!(
+    let fixes = field_fixes!(
+        a,
+        fixed,
         atlas_resolution,
         target_area,
         variance_gain,
@@ -248,18 +255,9 @@ pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> 
 /// returns what was fixed, one entry per field that changed.
 pub fn sanitize_image_space(a: &mut ImageSpaceSettings, limits: &CausticsLimits) -> Vec<Fix> {
     let fixed = a.sanitized_for(limits);
-    let mut fixes = Vec::new();
-    macro_rules! check {
-        ($($f:ident),*) => {$(
-            if fixed.$f != a.$f {
-                fixes.push((
-                    stringify!($f),
-                    format!("{:?} is out of range; clamped to {:?}", a.$f, fixed.$f),
-                ));
-            }
-        )*};
-    }
-    check!(
+    let fixes = field_fixes!(
+        a,
+        fixed,
         rsm_resolution,
         luminance_cutoff,
         stride,

@@ -29,7 +29,9 @@ pub const GUARD_WORDS: usize = (1 + SPLAT_GUARD_SPLATS as usize) * 16;
 
 #[derive(Default)]
 struct State {
-    requested: bool,
+    /// Frames asked for and not copied yet: one copy per render frame until none is left, so
+    /// no request is lost when the main world runs ahead of the render world.
+    requested: u32,
     /// Copies in flight, oldest first (one per requested frame).
     pending: std::collections::VecDeque<(Buffer, UVec2, u32, Arc<AtomicBool>)>,
 }
@@ -56,7 +58,7 @@ impl CausticsReadback {
     /// frame gives every frame's, in order).
     pub fn request(&self) {
         if let Ok(mut s) = self.0.lock() {
-            s.requested = true;
+            s.requested = s.requested.saturating_add(1);
         }
     }
 
@@ -117,10 +119,10 @@ fn copy_for_readback(
     let Ok(mut s) = readback.0.lock() else {
         return;
     };
-    if !s.requested {
+    if s.requested == 0 {
         return;
     }
-    s.requested = false;
+    s.requested -= 1;
     let row = (buffer.size.x * 16).div_ceil(256) * 256;
     let image_bytes = row as u64 * buffer.size.y as u64;
     let staging = ctx.render_device().create_buffer(&BufferDescriptor {

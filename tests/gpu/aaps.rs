@@ -4,10 +4,9 @@
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
 use bevy_caustics::reference::cache::AAPS_LEVELS;
 use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
-use bevy_caustics::{AapsSettings, CausticsTechnique, scenes};
-use glam::Vec3;
+use bevy_caustics::{AapsSettings, CausticsTechnique};
 
-use super::{GPU, closed_form_cases, require_gpu, scene};
+use super::{GPU, closed_form_cases, require_gpu, scene, spot_away_scene};
 
 /// Frames before the caustics buffer is read: the task buffer starts uniform and adapts every
 /// frame; after 8 frames the photon count changes by < 1 % per frame on these scenes.
@@ -216,19 +215,9 @@ fn aaps_dispatches_nothing_without_work() {
         return;
     }
     let dir = std::env::temp_dir().join(format!("bevy_caustics_aaps_{}", std::process::id()));
-    let mut away = scenes::glass_sphere();
-    away.name = "spot_away".into();
-    away.lights[0].kind = scenes::LightKind::Spot {
-        candela: 5000.0,
-        inner: 0.2,
-        outer: 0.3,
-    };
-    away.lights[0].translation = Vec3::new(0.0, 3.0, 0.0);
-    away.lights[0].rotation = scenes::shine_along(Vec3::Y);
-    scenes::gltf::write_gltf(&away, &dir).unwrap();
     for (path, photons) in [
         (scene("empty"), None),
-        (dir.join("spot_away.gltf"), None),
+        (spot_away_scene(&dir), None),
         (scene("glass_sphere"), Some(0)),
     ] {
         let report = run(RenderJob {

@@ -5,9 +5,9 @@
 use bevy::prelude::*;
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
 use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
-use bevy_caustics::{CausticsTechnique, ImageSpaceSettings, scenes};
+use bevy_caustics::{CausticsTechnique, ImageSpaceSettings};
 
-use super::{GPU, closed_form_cases, require_gpu, scene};
+use super::{GPU, closed_form_cases, require_gpu, scene, spot_away_scene};
 
 /// Frames before the caustics buffer is read (the denoiser's history saturates at 1 / α = 5
 /// frames; 16 give it three time constants).
@@ -257,10 +257,12 @@ fn image_space_denoising_pays_and_does_not_smear() {
     println!(
         "sun moved back at frame 12: RMSE before {before:.1} lx, frames 13..20 {after:.1?}, settled {settled:.1} lx"
     );
-    // The move shows (the first frame after it is far from the reference) and passes.
-    assert!(after[0] > 1.5 * settled, "{after:?} vs settled {settled}");
+    // The move shows (a frame right after it is far from the reference; the readback may
+    // trail the main world by a frame) and passes within the 8 frames.
+    let shown = after[..3].iter().position(|&e| e > 1.5 * settled);
+    assert!(shown.is_some(), "{after:?} vs settled {settled}");
     assert!(
-        after.iter().any(|&e| e < 1.5 * settled),
+        after[shown.unwrap()..].iter().any(|&e| e < 1.5 * settled),
         "{after:?} vs settled {settled}"
     );
     // What the reset buys: the same move with the history kept.
@@ -291,19 +293,9 @@ fn image_space_dispatches_nothing_without_work() {
         return;
     }
     let dir = std::env::temp_dir().join(format!("bevy_caustics_is_{}", std::process::id()));
-    let mut away = scenes::glass_sphere();
-    away.name = "spot_away".into();
-    away.lights[0].kind = scenes::LightKind::Spot {
-        candela: 5000.0,
-        inner: 0.2,
-        outer: 0.3,
-    };
-    away.lights[0].translation = Vec3::new(0.0, 3.0, 0.0);
-    away.lights[0].rotation = scenes::shine_along(Vec3::Y);
-    scenes::gltf::write_gltf(&away, &dir).unwrap();
     for (path, photons) in [
         (scene("empty"), PHOTONS),
-        (dir.join("spot_away.gltf"), PHOTONS),
+        (spot_away_scene(&dir), PHOTONS),
         (scene("glass_sphere"), 0),
     ] {
         let report = run(RenderJob {

@@ -23,6 +23,7 @@ pub const SVGF_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
 pub fn compute_source() -> String {
     [
         include_str!("../optics.wgsl"),
+        include_str!("../gbuffer.wgsl"),
         include_str!("trace.wgsl"),
         include_str!("svgf.wgsl"),
     ]

@@ -5,7 +5,8 @@
 // the camera (plane / concave / convex), marches on in the camera's depth, tests the normal
 // and adds E = Φ / A_p (the exact pixel footprint) to the photon map in 64-bit fixed point.
 // `resolve` turns the photon map into irradiance (lux) and clears it, and stores the view's
-// depth and normal for the denoiser. Concatenated after optics.wgsl by pipelines.rs.
+// depth and normal for the denoiser. Concatenated after optics.wgsl and
+// gbuffer.wgsl by pipelines.rs.
 
 struct SpaceView {
     clip_from_view: mat4x4<f32>,
@@ -119,16 +120,7 @@ fn camera_depth(p: vec2<i32>) -> f32 {
 }
 
 fn gbuffer_normal(p: vec2<i32>) -> vec4<f32> {
-    let g = textureLoad(gbuffer, p, 0);
-    if all(g == vec4<u32>(0u)) {
-        return vec4(0.0);
-    }
-    let a = g.a & 0xFFFFFFu;
-    let v = vec2(f32(a & 0xFFFu), f32((a >> 12u) & 0xFFFu)) / 4095.0 * 2.0 - 1.0;
-    var n = vec3(v, 1.0 - abs(v.x) - abs(v.y));
-    let t = clamp(-n.z, 0.0, 1.0);
-    n = vec3(n.xy + select(vec2(t), vec2(-t), n.xy >= vec2(0.0)), n.z);
-    return vec4(normalize(n), 1.0);
+    return gbuffer_decode_normal(textureLoad(gbuffer, p, 0));
 }
 
 fn rsm_normal(t: vec4<f32>) -> vec3<f32> {

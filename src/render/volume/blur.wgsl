@@ -3,6 +3,7 @@
 // buffer. Weights: Gaussian in pixels, times a relative depth term, times a normal term from
 // Bevy's deferred G-buffer (octahedral normal in the low 24 bits of .a); pixels without
 // geometry take no part. The weights are normalised, so a smooth field keeps its mean.
+// Concatenated after src/render/gbuffer.wgsl by src/render/volume/mod.rs.
 
 @group(0) @binding(0) var src: texture_2d<f32>;
 @group(0) @binding(1) var view_depth: texture_depth_2d;
@@ -20,16 +21,7 @@ fn vs_full(@builtin(vertex_index) vi: u32) -> FOut {
 }
 
 fn gnormal(p: vec2<i32>) -> vec4<f32> {
-    let g = textureLoad(gbuffer, p, 0);
-    if all(g == vec4<u32>(0u)) {
-        return vec4(0.0);
-    }
-    let a = g.a & 0xFFFFFFu;
-    let v = vec2(f32(a & 0xFFFu), f32((a >> 12u) & 0xFFFu)) / 4095.0 * 2.0 - 1.0;
-    var n = vec3(v, 1.0 - abs(v.x) - abs(v.y));
-    let t = clamp(-n.z, 0.0, 1.0);
-    n = vec3(n.xy + select(vec2(t), vec2(-t), n.xy >= vec2(0.0)), n.z);
-    return vec4(normalize(n), 1.0);
+    return gbuffer_decode_normal(textureLoad(gbuffer, p, 0));
 }
 
 @fragment

@@ -50,7 +50,7 @@ pub(crate) fn build(app: &mut App) {
                 "bevy_caustics/volume_raster.wgsl",
             )),
             blur: shaders.add(Shader::from_wgsl(
-                include_str!("blur.wgsl"),
+                [include_str!("../gbuffer.wgsl"), include_str!("blur.wgsl")].join("\n"),
                 "bevy_caustics/volume_blur.wgsl",
             )),
         }
