@@ -88,6 +88,12 @@ fn spot_away_scene(dir: &Path) -> PathBuf {
     dir.join("spot_away.gltf")
 }
 
+/// The cached CPU reference of scene `name` at 128² (`assets/reference/`).
+fn reference(name: &str) -> bevy_caustics::reference::CausticImage {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("assets/reference/{name}_128.exr"));
+    bevy_caustics::reference::CausticImage::read_exr(&p).expect("cached reference")
+}
+
 fn require_gpu() -> bool {
     match find_adapter() {
         Ok(name) => {

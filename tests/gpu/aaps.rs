@@ -3,10 +3,10 @@
 
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
 use bevy_caustics::reference::cache::AAPS_LEVELS;
-use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
+use bevy_caustics::reference::{compare, plane_region_mean};
 use bevy_caustics::{AapsSettings, CausticsTechnique};
 
-use super::{GPU, closed_form_cases, require_gpu, scene, spot_away_scene};
+use super::{GPU, closed_form_cases, reference, require_gpu, scene, spot_away_scene};
 
 /// Frames before the caustics buffer is read: the task buffer starts uniform and adapts every
 /// frame; after 8 frames the photon count changes by < 1 % per frame on these scenes.
@@ -24,12 +24,6 @@ fn aaps(name: &str, size: u32, photons: Option<u64>, settings: AapsSettings) -> 
         ..Default::default()
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn reference(name: &str) -> CausticImage {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("assets/reference/{name}_128.exr"));
-    CausticImage::read_exr(&p).expect("cached reference")
 }
 
 /// Mean caustic irradiance over the interior of the lit region of `mirror_wall` and

@@ -7,7 +7,7 @@ use bevy_caustics::headless::{RenderJob, RenderReport, run};
 use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
 use bevy_caustics::{CausticsTechnique, ImageSpaceSettings};
 
-use super::{GPU, closed_form_cases, require_gpu, scene, spot_away_scene};
+use super::{GPU, closed_form_cases, reference, require_gpu, scene, spot_away_scene};
 
 /// Frames before the caustics buffer is read (the denoiser's history saturates at 1 / α = 5
 /// frames; 16 give it three time constants).
@@ -33,12 +33,6 @@ fn image_space(job: RenderJob) -> RenderReport {
         ..job
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn reference(name: &str) -> CausticImage {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("assets/reference/{name}_128.exr"));
-    CausticImage::read_exr(&p).expect("cached reference")
 }
 
 /// Mean caustic irradiance over the interior of the lit region of `mirror_wall` and

@@ -2,11 +2,11 @@
 //! 1 to 3 slabs, differential updates counted pass by pass, frustum culling, stress.
 
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
-use bevy_caustics::reference::{CausticImage, compare, plane_region_mean};
+use bevy_caustics::reference::{compare, plane_region_mean};
 use bevy_caustics::{CausticsTechnique, CausticsVolume, scenes};
 use glam::Vec3;
 
-use super::{GPU, closed_form_cases, require_gpu, scene};
+use super::{GPU, closed_form_cases, reference, require_gpu, scene};
 
 fn volume(
     path: std::path::PathBuf,
@@ -24,12 +24,6 @@ fn volume(
         ..Default::default()
     })
     .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn reference(name: &str) -> CausticImage {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("assets/reference/{name}_128.exr"));
-    CausticImage::read_exr(&p).expect("cached reference")
 }
 
 /// A volume fitted around `mirror_wall`'s mirror and one around `glass_slab`'s slab: mean
