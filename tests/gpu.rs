@@ -94,6 +94,21 @@ fn reference(name: &str) -> bevy_caustics::reference::CausticImage {
     bevy_caustics::reference::CausticImage::read_exr(&p).expect("cached reference")
 }
 
+/// The caustics image `img` of closed-form case `case` (from [`closed_form_cases`]) at 128²:
+/// asserts it is finite and the region covers more than 200 pixels; returns the region's mean
+/// irradiance (lux), its pixels and the relative error against the closed form.
+fn closed_form_error(
+    case: &ClosedForm,
+    img: &bevy_caustics::reference::CausticImage,
+) -> (f32, usize, f32) {
+    let (desc, n, d, region, expect) = case;
+    assert!(img.all_finite(), "{}: non-finite caustics", desc.name);
+    let (_, _, cam) = desc.to_trace(128, 128);
+    let (mean, px) = bevy_caustics::reference::plane_region_mean(img, &cam, *n, *d, region);
+    assert!(px > 200, "{}: {px} px in the region", desc.name);
+    (mean, px, mean / expect - 1.0)
+}
+
 fn require_gpu() -> bool {
     match find_adapter() {
         Ok(name) => {
