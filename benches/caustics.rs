@@ -1,5 +1,7 @@
 //! Criterion benchmarks: the optics core, BVH build and traversal, the reference tracer
-//! (photons per second) and the main-world CPU cost of a frame for 1, 10 and 100 casters.
+//! (photons per second), the main-world CPU cost of a frame for 1, 10 and 100 casters, and the
+//! photon map's CPU baselines (seed 001 tables 1 and 2: a kd-tree against the hash grid, a
+//! k-nearest max-heap against all photons within the radius).
 //!
 //! `cargo bench --bench caustics` (release profile). Under `cargo test` each runs once.
 
@@ -157,11 +159,158 @@ fn bench_frame_cpu(c: &mut Criterion) {
     g.finish();
 }
 
+/// A caustic-like photon set on a 2 m x 2 m floor: half uniform, half in a focus (a Gaussian
+/// of 0.1 m), the way a glass ball's photons land.
+fn photon_set(n: usize, seed: u64) -> Vec<glam::Vec3> {
+    let mut rng = Pcg32::new(seed, 7);
+    (0..n)
+        .map(|i| {
+            if i % 2 == 0 {
+                glam::Vec3::new(rng.next_f32() * 2.0 - 1.0, 0.0, rng.next_f32() * 2.0 - 1.0)
+            } else {
+                // Box-Muller.
+                let (u, v) = (rng.next_f32().max(1e-7), rng.next_f32());
+                let m = 0.1 * (-2.0 * u.ln()).sqrt();
+                let a = core::f32::consts::TAU * v;
+                glam::Vec3::new(m * a.cos(), 0.0, m * a.sin())
+            }
+        })
+        .collect()
+}
+
+/// The seed's rows: (photons per side of the launch grid, radii in metres).
+const TABLE_1: [(usize, [f32; 3]); 3] = [
+    (512, [0.02, 0.05, 0.1]),
+    (256, [0.05, 0.1, 0.2]),
+    (128, [0.05, 0.1, 0.2]),
+];
+const TABLE_2: [(usize, [f32; 3]); 2] = [(512, [0.02, 0.05, 0.1]), (256, [0.05, 0.1, 0.2])];
+/// Gather points per frame: a 64 x 64 view of the floor (CI runs each bench once).
+const QUERIES: usize = 64 * 64;
+/// The max-heap's size of table 2 (the k nearest photons).
+const HEAP_K: usize = 64;
+
+fn queries() -> Vec<glam::Vec3> {
+    let side = (QUERIES as f32).sqrt() as usize;
+    (0..QUERIES)
+        .map(|i| {
+            let (x, z) = ((i % side) as f32, (i / side) as f32);
+            glam::Vec3::new(x / side as f32 * 1.6 - 0.8, 0.0, z / side as f32 * 1.6 - 0.8)
+        })
+        .collect()
+}
+
+fn stored(grid: &optics::PhotonGrid, pts: &[glam::Vec3]) -> Vec<optics::StoredPhoton> {
+    grid.order
+        .iter()
+        .map(|&i| optics::StoredPhoton {
+            position: pts[i as usize],
+            flux: glam::Vec3::splat(1e-3),
+            normal: glam::Vec3::Y,
+        })
+        .collect()
+}
+
+/// Seed 001 table 1: build + one radius query per gather point, kd-tree (kiddo) against the
+/// hash grid (`optics::build_grid` + `optics::gather`, the GPU's twin), on the CPU.
+fn bench_photon_map_table1(c: &mut Criterion) {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    let mut g = c.benchmark_group("photon_map_table1");
+    g.sample_size(10);
+    let qs = queries();
+    for (side, radii) in TABLE_1 {
+        let pts = photon_set(side * side, side as u64);
+        let arr: Vec<[f32; 3]> = pts.iter().map(|p| p.to_array()).collect();
+        for r in radii {
+            g.bench_function(format!("{side}x{side}_r{r}/kd_tree"), |b| {
+                b.iter(|| {
+                    let tree: ImmutableKdTree<f32, 3> =
+                        ImmutableKdTree::new_from_slice(&arr).expect("tree");
+                    qs.iter()
+                        .map(|q| {
+                            tree.query(&q.to_array())
+                                .within::<SquaredEuclidean<f32>>(r * r)
+                                .unsorted()
+                                .execute()
+                                .iter()
+                                .map(|h| optics::gather_kernel(h.distance, r * r))
+                                .sum::<f32>()
+                        })
+                        .sum::<f32>()
+                })
+            });
+            g.bench_function(format!("{side}x{side}_r{r}/hash_grid"), |b| {
+                b.iter(|| {
+                    let grid = optics::build_grid(&pts, r, 1.0 / r, optics::MAX_GRID_CELLS);
+                    let ph = stored(&grid, &pts);
+                    qs.iter()
+                        .map(|q| optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0).irradiance.x)
+                        .sum::<f32>()
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+/// Seed 001 table 2: the gather over the hash grid keeping the k nearest photons in a max-heap
+/// (radius = the k-th distance, Jensen's estimate) against every photon within r (ours).
+fn bench_photon_map_table2(c: &mut Criterion) {
+    use std::collections::BinaryHeap;
+    let mut g = c.benchmark_group("photon_map_table2");
+    g.sample_size(10);
+    let qs = queries();
+    for (side, radii) in TABLE_2 {
+        let pts = photon_set(side * side, side as u64);
+        for r in radii {
+            let grid = optics::build_grid(&pts, r, 1.0 / r, optics::MAX_GRID_CELLS);
+            let ph = stored(&grid, &pts);
+            g.bench_function(format!("{side}x{side}_r{r}/heap_k{HEAP_K}"), |b| {
+                b.iter(|| {
+                    let mut heap: BinaryHeap<(u32, u32)> = BinaryHeap::with_capacity(HEAP_K + 1);
+                    qs.iter()
+                        .map(|q| {
+                            heap.clear();
+                            for (a, e) in grid.layout.rows(*q).into_iter().flatten() {
+                                let range = grid.start[a as usize]..grid.start[e as usize];
+                                for i in range {
+                                    let d2 = (ph[i as usize].position - *q).length_squared();
+                                    if d2 < r * r {
+                                        heap.push((d2.to_bits(), i));
+                                        if heap.len() > HEAP_K {
+                                            heap.pop();
+                                        }
+                                    }
+                                }
+                            }
+                            let r2 = heap.peek().map_or(0.0, |h| f32::from_bits(h.0));
+                            heap.iter()
+                                .map(|&(_, i)| ph[i as usize].flux.x)
+                                .sum::<f32>()
+                                / (core::f32::consts::PI * r2).max(1e-12)
+                        })
+                        .sum::<f32>()
+                })
+            });
+            g.bench_function(format!("{side}x{side}_r{r}/all_within_r"), |b| {
+                b.iter(|| {
+                    qs.iter()
+                        .map(|q| optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0).irradiance.x)
+                        .sum::<f32>()
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
     bench_optics,
     bench_bvh,
     bench_tracer,
-    bench_frame_cpu
+    bench_frame_cpu,
+    bench_photon_map_table1,
+    bench_photon_map_table2
 );
 criterion_main!(benches);

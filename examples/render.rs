@@ -5,7 +5,7 @@
 //! cargo run --release --example render -- SCENE.gltf --technique reference --width 256 \
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
-//!     [--volume field=value,...] [--image-space field=value,...]
+//!     [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]
 //! ```
 //!
 //! The scene path is relative to the working directory (its buffers and images to the glTF's
@@ -60,7 +60,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                 let t = v.ok_or("--technique needs a value")?;
                 job.technique = CausticsTechnique::from_name(t).ok_or_else(|| {
                     format!(
-                        "unknown technique '{t}' (available: reference, aaps, volume, image_space)"
+                        "unknown technique '{t}' (available: reference, aaps, volume, image_space, photon_map)"
                     )
                 })?;
             }
@@ -175,6 +175,33 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                     }
                 }
             }
+            "--photon-map" => {
+                // Photon-map settings as `field=value,...` (PhotonMapSettings names).
+                let t = v.ok_or("--photon-map needs field=value pairs")?;
+                for kv in t.split(',') {
+                    let (k, x) = kv
+                        .split_once('=')
+                        .ok_or_else(|| format!("--photon-map expects field=value, got '{kv}'"))?;
+                    let f = || {
+                        x.parse::<f32>()
+                            .ok()
+                            .filter(|x| x.is_finite())
+                            .ok_or_else(|| format!("--photon-map {k} expects a number, got '{x}'"))
+                    };
+                    let a = &mut job.photon_map;
+                    match k {
+                        "radius" => a.radius = f()?,
+                        "max_bounces" => a.max_bounces = f()? as u32,
+                        "max_grid_cells" => a.max_grid_cells = f()? as u32,
+                        "progressive" => a.progressive = f()? != 0.0,
+                        "alpha" => a.alpha = f()?,
+                        "max_frames" => a.max_frames = f()? as u32,
+                        "normal_threshold" => a.normal_threshold = f()?,
+                        "shared_memory" => a.shared_memory = f()? != 0.0,
+                        _ => return Err(format!("--photon-map: unknown field '{k}'")),
+                    }
+                }
+            }
             "--out-exr" => out.exr = Some(path(v)?),
             "--out-png" => out.png = Some(path(v)?),
             "--json" => out.json = Some(path(v)?),
@@ -190,7 +217,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]")?;
     Ok((job, out))
 }
 

@@ -1,7 +1,7 @@
 //! Error against run time, for every scene and technique: `REPORT.md` plus one SVG per scene.
 //!
 //! ```text
-//! cargo run --release --example report -- [--scenes a,b,..] [--techniques reference,aaps,image_space] \
+//! cargo run --release --example report -- [--scenes a,b,..] [--techniques reference,aaps,image_space,photon_map] \
 //!     [--out DIR] [--size N]
 //! ```
 //!
@@ -44,6 +44,14 @@ const IMAGE_SPACE_LEVELS: [(&str, u64, u32); 3] = [
     ("high: 2^20/light, RSM 1024", 1 << 20, 1024),
 ];
 
+/// The photon-map quality levels: (name, photons per light and frame), default settings
+/// (progressive: the 12 measured frames accumulate).
+const PHOTON_MAP_LEVELS: [(&str, u64); 3] = [
+    ("low: 2^16/light", 1 << 16),
+    ("medium: 2^18/light", 1 << 18),
+    ("high: 2^20/light", 1 << 20),
+];
+
 fn main() {
     bevy_caustics::headless::quiet_headless_environment();
     if let Err(e) = real_main() {
@@ -69,6 +77,7 @@ fn real_main() -> Result<(), String> {
         CausticsTechnique::Reference,
         CausticsTechnique::Aaps,
         CausticsTechnique::ImageSpace,
+        CausticsTechnique::PhotonMap,
     ];
     let mut out = root.join("report");
     let mut size = 128u32;
@@ -84,7 +93,7 @@ fn real_main() -> Result<(), String> {
                     .split(',')
                     .map(|t| {
                         CausticsTechnique::from_name(t).ok_or_else(|| {
-                            format!("unknown technique '{t}' (available: reference, aaps, volume, image_space)")
+                            format!("unknown technique '{t}' (available: reference, aaps, volume, image_space, photon_map)")
                         })
                     })
                     .collect::<Result<_, _>>()?
@@ -136,6 +145,12 @@ fn real_main() -> Result<(), String> {
                             ..Default::default()
                         };
                         (name.to_string(), *photons, Default::default(), settings)
+                    })
+                    .collect(),
+                CausticsTechnique::PhotonMap => PHOTON_MAP_LEVELS
+                    .iter()
+                    .map(|(name, photons)| {
+                        (name.to_string(), *photons, Default::default(), Default::default())
                     })
                     .collect(),
                 _ => sweep
@@ -202,7 +217,7 @@ fn real_main() -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores). `gpu ms` is the sum of the median GPU times of the caustics passes over the measured frames (12 frames; AAPS's task buffer adapts during them, from a uniform start); the last column lists each pass. AAPS quality levels: photon budget per light (a ceiling) and target splat area; `splats` counts the splats drawn in the last frame. Image-space quality levels: photons per light and frame (`photons` counts those that started on a caster texel) and the side of the reflective shadow maps, with the default settings (Hi-Z march, SVGF).\n"
+        "The reference technique runs on the CPU: `cpu ms` is its trace (wall clock, all cores). `gpu ms` is the sum of the median GPU times of the caustics passes over the measured frames (12 frames; AAPS's task buffer adapts during them, from a uniform start); the last column lists each pass. AAPS quality levels: photon budget per light (a ceiling) and target splat area; `splats` counts the splats drawn in the last frame. Image-space quality levels: photons per light and frame (`photons` counts those that started on a caster texel) and the side of the reflective shadow maps, with the default settings (Hi-Z march, SVGF). Photon-map quality levels: photons per light and frame with the default settings, so the 12 measured frames accumulate progressively (`photons` counts those emitted in the last frame).\n"
     );
     let _ = writeln!(
         md,

@@ -40,8 +40,8 @@ use bevy::render::renderer::{RenderAdapter, RenderDevice};
 pub use components::validate::CausticsWarnings;
 pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
-    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, ImageSpaceSettings, VolumeFace,
-    mark_every_light,
+    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, ImageSpaceSettings, PhotonMapSettings,
+    VolumeFace, mark_every_light,
 };
 #[cfg(feature = "inspector")]
 pub use inspector::CausticsInspectorPlugin;
@@ -53,7 +53,7 @@ pub mod prelude {
     pub use crate::{
         AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
         CausticsQuality, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos,
-        ImageSpaceSettings, VolumeFace,
+        ImageSpaceSettings, PhotonMapSettings, VolumeFace,
     };
 }
 
@@ -130,6 +130,7 @@ impl Plugin for CausticsPlugin {
         app.register_type::<Caustics>()
             .register_type::<AapsSettings>()
             .register_type::<ImageSpaceSettings>()
+            .register_type::<PhotonMapSettings>()
             .register_type::<CausticLight>()
             .register_type::<CausticMaterial>()
             .register_type::<CausticsVolume>()

@@ -119,6 +119,10 @@ impl CausticsLimits {
             CausticsTechnique::Aaps => self.max_aaps_photons,
             // One 2D dispatch of 64-thread workgroups per light (65 535 x 256 groups).
             CausticsTechnique::ImageSpace => MAX_IMAGE_SPACE_PHOTONS,
+            // Every light's photons in one binding of 32-byte photons.
+            CausticsTechnique::PhotonMap => {
+                MAX_IMAGE_SPACE_PHOTONS.min(self.max_binding_bytes / crate::optics::PHOTON_BYTES)
+            }
             CausticsTechnique::Reference | CausticsTechnique::Volume => self.max_reference_photons,
         }
     }

@@ -763,6 +763,8 @@ mod image_space;
 mod inspector;
 #[path = "cpu/limits.rs"]
 mod limits;
+#[path = "cpu/photon_map.rs"]
+mod photon_map;
 #[path = "cpu/reference_cache.rs"]
 mod reference_cache;
 #[path = "cpu/volume.rs"]

@@ -19,6 +19,8 @@ mod examples;
 mod first_use;
 #[path = "gpu/image_space.rs"]
 mod image_space;
+#[path = "gpu/photon_map.rs"]
+mod photon_map;
 #[path = "gpu/twins.rs"]
 mod twins;
 #[path = "gpu/volume.rs"]
@@ -684,6 +686,59 @@ fn stiff_and_extreme_cases_gpu() {
             "{} (image_space): non-finite caustics",
             case.name
         );
+        // The photon map: odd cases with a grid far too small for the photons' bounds
+        // (4096 cells at r = 1e-4 of the casters' radius: the cells must double, counted);
+        // the million-photon case traces 2^22 photons (the most 32-byte photons one 128 MiB
+        // binding holds) and stores about a million with a radius as large as the ball, so its
+        // focus falls into a handful of cells.
+        let million = case.photons >= 1 << 20;
+        let pm_settings = if million {
+            bevy_caustics::PhotonMapSettings {
+                radius: 1.0,
+                ..Default::default()
+            }
+        } else if i % 2 == 1 {
+            bevy_caustics::PhotonMapSettings {
+                radius: 1e-4,
+                max_grid_cells: 4096,
+                ..Default::default()
+            }
+        } else {
+            Default::default()
+        };
+        // The million-photon case at its own 4 x 4 target: each pixel gathers from up to
+        // 620 000 photons.
+        let side = if million { case.size } else { 32 };
+        let pm = run(RenderJob {
+            scene: dir.join(format!("stiff_{i}.gltf")),
+            technique: bevy_caustics::CausticsTechnique::PhotonMap,
+            width: side,
+            height: side,
+            photons: Some(if million {
+                1 << 22
+            } else {
+                case.photons.min(1 << 16)
+            }),
+            frames: 4,
+            photon_map: pm_settings,
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("{} (photon_map): {e}", case.name));
+        println!("{:<48} photon_map {:?}", case.name, pm.photon_map);
+        assert!(
+            pm.caustics.as_ref().unwrap().all_finite(),
+            "{} (photon_map): non-finite caustics",
+            case.name
+        );
+        if let Some(c) = pm.photon_map.as_ref() {
+            if i % 2 == 1 && !million && c.photons_stored > 1 {
+                assert!(c.coarsened > 0, "{}: grid not coarsened: {c:?}", case.name);
+                assert!(c.grid_cells <= 4096, "{}: {c:?}", case.name);
+            }
+            if million {
+                assert!(c.photons_stored >= 950_000, "{}: {c:?}", case.name);
+            }
+        }
         // And caustics volumes (one fitted per light, 3 slabs; the gem's energy check needs
         // G-buffers that resolve its facets: 200², the CLI default).
         let g = if gem { 200 } else { 64 };

@@ -64,6 +64,13 @@ pub enum CausticsTechnique {
     /// and are denoised by SVGF. One specular event (two refractions through a closed glass
     /// object). Milliseconds per frame. Settings: [`crate::ImageSpaceSettings`].
     ImageSpace,
+    /// Hash-grid photon mapping (seed 001): photons traced through the scene BVH (like AAPS)
+    /// and stored at their first diffuse hit after a specular one, sorted into a uniform grid
+    /// of cell size r on the GPU, and gathered per pixel within r (the 3x3x3 cells as 9 row
+    /// ranges); on a still view the frames accumulate with a shrinking radius (progressive
+    /// photon mapping), so the error keeps falling towards the reference. Milliseconds per
+    /// frame. Settings: [`crate::PhotonMapSettings`].
+    PhotonMap,
 }
 
 impl CausticsTechnique {
@@ -74,6 +81,7 @@ impl CausticsTechnique {
             Self::Aaps => "aaps",
             Self::Volume => "volume",
             Self::ImageSpace => "image_space",
+            Self::PhotonMap => "photon_map",
         }
     }
 
@@ -84,6 +92,7 @@ impl CausticsTechnique {
             "aaps" => Some(Self::Aaps),
             "volume" => Some(Self::Volume),
             "image_space" => Some(Self::ImageSpace),
+            "photon_map" => Some(Self::PhotonMap),
             _ => None,
         }
     }

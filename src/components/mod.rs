@@ -8,6 +8,7 @@ mod camera;
 mod image_space;
 mod light;
 mod material;
+mod photon_map;
 pub mod validate;
 mod volume;
 
@@ -16,4 +17,5 @@ pub use camera::*;
 pub use image_space::*;
 pub use light::*;
 pub use material::*;
+pub use photon_map::*;
 pub use volume::*;

@@ -6,7 +6,7 @@ use bevy::prelude::*;
 
 use super::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsQuality, CausticsVolume,
-    ImageSpaceSettings,
+    ImageSpaceSettings, PhotonMapSettings,
 };
 use crate::limits::CausticsLimits;
 
@@ -274,6 +274,24 @@ pub fn sanitize_image_space(a: &mut ImageSpaceSettings, limits: &CausticsLimits)
     fixes
 }
 
+/// Clamp photon-map settings into range (see [`PhotonMapSettings::sanitized`]); returns what
+/// was fixed, one entry per field that changed.
+pub fn sanitize_photon_map(a: &mut PhotonMapSettings, _limits: &CausticsLimits) -> Vec<Fix> {
+    let fixed = a.sanitized();
+    let fixes = field_fixes!(
+        a,
+        fixed,
+        radius,
+        max_bounces,
+        max_grid_cells,
+        alpha,
+        max_frames,
+        normal_threshold
+    );
+    *a = fixed;
+    fixes
+}
+
 /// Clamp a camera's photon count (a `CausticsQuality::Custom` above what its technique
 /// allows on this device, [`CausticsLimits::max_photons`]); returns what was fixed.
 pub fn sanitize_caustics(c: &mut Caustics, limits: &CausticsLimits) -> Vec<Fix> {
@@ -330,6 +348,7 @@ pub(crate) fn plugin(app: &mut App) {
                 validate::<CausticMaterial>("CausticMaterial", |m, _| sanitize_material(m)),
                 validate::<AapsSettings>("AapsSettings", sanitize_aaps),
                 validate::<ImageSpaceSettings>("ImageSpaceSettings", sanitize_image_space),
+                validate::<PhotonMapSettings>("PhotonMapSettings", sanitize_photon_map),
             )
                 .in_set(crate::CausticsSystems::Validate),
         );

@@ -78,6 +78,8 @@ pub struct RenderJob {
     pub every_frame: bool,
     /// Settings of the `image_space` technique. Default: `ImageSpaceSettings::default()`.
     pub image_space: crate::ImageSpaceSettings,
+    /// Settings of the `photon_map` technique. Default: `PhotonMapSettings::default()`.
+    pub photon_map: crate::PhotonMapSettings,
     /// Technique `volume`: the settings of the volumes fitted around the casters (one per
     /// light) when the scene declares none; its box and faces are ignored.
     pub volume: crate::CausticsVolume,
@@ -104,6 +106,7 @@ impl Default for RenderJob {
             limits: None,
             aaps: Default::default(),
             image_space: Default::default(),
+            photon_map: Default::default(),
             every_frame: false,
             volume: Default::default(),
         }
@@ -151,12 +154,17 @@ pub struct RenderReport {
     /// With `every_frame`: the caustics buffer of every measured frame, in order.
     #[serde(skip)]
     pub frame_caustics: Vec<CausticImage>,
+    /// With `every_frame`: the counter words read back with each of `frame_caustics`.
+    #[serde(skip)]
+    pub frame_counters: Vec<Vec<u32>>,
     /// With `linear`: the camera's exposure.
     pub exposure: f32,
     /// AAPS counters of the last frame (technique `aaps` only).
     pub aaps: Option<AapsCounters>,
     /// Image-space counters of the last frame (technique `image_space` only).
     pub image_space: Option<ImageSpaceCounters>,
+    /// Photon-map counters of the last frame (technique `photon_map` only).
+    pub photon_map: Option<PhotonMapCounters>,
     /// Counters of the first visible volume (technique `volume` only).
     pub volume: Option<super::volume::VolumeCounters>,
     /// The caustics passes dispatched in each measured frame.
@@ -308,6 +316,97 @@ impl ImageSpaceCounters {
     }
 }
 
+/// The photon-map counters of one frame (`C_*` in src/render/photon_map/photon.wgsl).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PhotonMapCounters {
+    /// Photons that left a light with flux.
+    pub photons_emitted: u64,
+    /// Photons stored (first diffuse hit after a specular one), within the capacity.
+    pub photons_stored: u64,
+    /// Photons past the capacity (dropped).
+    pub overflow: u64,
+    /// Photons whose first hit was diffuse (direct light, not a caustic).
+    pub direct: u64,
+    /// Photons that hit nothing.
+    pub missed: u64,
+    /// Paths stopped at the bounce limit.
+    pub max_depth: u64,
+    /// Total internal reflections.
+    pub tir: u64,
+    /// Non-finite states caught.
+    pub nan_guards: u64,
+    /// Grid cells (X·Y·Z) and the grid's dimensions.
+    pub grid_cells: u64,
+    /// X, Y, Z.
+    pub grid_dims: [u64; 3],
+    /// Doublings of the cell size the memory budget forced (0: cell = radius).
+    pub coarsened: u64,
+    /// Pixels gathered.
+    pub pixels: u64,
+    /// Photons distance-tested per gathered pixel, mean and max.
+    pub visited_mean: f64,
+    /// See `visited_mean`.
+    pub visited_max: u64,
+    /// Photons that contributed per gathered pixel, mean and max.
+    pub gathered_mean: f64,
+    /// See `gathered_mean`.
+    pub gathered_max: u64,
+    /// Photons within the radius rejected by the normal test.
+    pub normal_rejects: u64,
+    /// 8x8 tiles gathered through workgroup memory, and tiles that fell back.
+    pub shared_tiles: u64,
+    /// See `shared_tiles`.
+    pub fallback_tiles: u64,
+    /// Pixels on mirrors gathered at their reflected point.
+    pub mirror_pixels: u64,
+    /// Right-eye pixels taken from the left eye, of those considered.
+    pub stereo_reused: u64,
+    /// See `stereo_reused`.
+    pub stereo_pixels: u64,
+    /// The progressive frame shown (1 right after a change).
+    pub accumulated_frames: u64,
+}
+
+impl PhotonMapCounters {
+    /// From the counter words of a readback (the header's first 32 words).
+    pub fn from_words(w: &[u32]) -> Self {
+        let c = |i: usize| w.get(i).copied().unwrap_or(0) as u64;
+        let pixels = c(10);
+        let per_pixel = |v: u64| {
+            if pixels > 0 {
+                v as f64 / pixels as f64
+            } else {
+                0.0
+            }
+        };
+        Self {
+            photons_emitted: c(0),
+            photons_stored: c(1).saturating_sub(c(4)),
+            overflow: c(4),
+            direct: c(2),
+            missed: c(3),
+            max_depth: c(5),
+            tir: c(6),
+            nan_guards: c(7),
+            grid_cells: c(8),
+            grid_dims: [c(21), c(22), c(23)],
+            coarsened: c(9),
+            pixels,
+            visited_mean: per_pixel(c(11)),
+            visited_max: c(20),
+            gathered_mean: per_pixel(c(12)),
+            gathered_max: c(13),
+            normal_rejects: c(14),
+            shared_tiles: c(15),
+            fallback_tiles: c(16),
+            mirror_pixels: c(17),
+            stereo_reused: c(18),
+            stereo_pixels: c(19),
+            accumulated_frames: c(24),
+        }
+    }
+}
+
 /// This frame's GPU and CPU time of every caustics pass that recorded one, appended to
 /// `samples` under `"{pass}@gpu"` / `"{pass}@cpu"`.
 fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut BTreeMap<String, Vec<f64>>) {
@@ -315,6 +414,7 @@ fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut BTreeMap<Stri
         .chain(crate::render::aaps::passes::ALL_PASSES)
         .chain(crate::render::volume::passes::all_passes())
         .chain(crate::render::image_space::passes::ALL_PASSES)
+        .chain(crate::render::photon_map::passes::ALL_PASSES)
     {
         for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
             let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
@@ -601,6 +701,10 @@ fn drive(
             }
             if job.0.technique != CausticsTechnique::Reference {
                 log.take();
+                // The camera's first frame: with `every_frame`, read it back too.
+                if job.0.every_frame {
+                    readback.request();
+                }
                 *phase = Phase::Measuring(0);
                 return;
             }
@@ -643,6 +747,7 @@ fn drive(
             o.report.frame_passes.push(frame);
             if job.0.every_frame && job.0.technique != CausticsTechnique::Reference {
                 while let Some(snap) = readback.poll() {
+                    o.report.frame_counters.push(snap.counters.to_vec());
                     o.report.frame_caustics.push(snap.image);
                 }
                 if n + 1 < job.0.frames.max(4) {
@@ -685,6 +790,7 @@ fn drive(
             {
                 while let Some(snap) = readback.poll() {
                     if job.0.every_frame {
+                        o.report.frame_counters.push(snap.counters.to_vec());
                         o.report.frame_caustics.push(snap.image.clone());
                     }
                     o.snapshot = Some(snap);
@@ -752,6 +858,7 @@ fn spawn_cameras(
     let mut main = commands.spawn((
         job.aaps.clone(),
         job.image_space.clone(),
+        job.photon_map.clone(),
         MainCamera,
         Camera3d::default(),
         Camera {
@@ -837,6 +944,14 @@ fn finish_report(
         o.report.photons_traced = c.photons_emitted;
         o.report.photons_in_view = c.camera_hits;
         o.report.image_space = Some(c);
+        o.report.caustics = Some(snap.image);
+    } else if job.technique == CausticsTechnique::PhotonMap
+        && let Some(snap) = o.snapshot.take()
+    {
+        let c = PhotonMapCounters::from_words(&snap.counters);
+        o.report.photons_traced = c.photons_emitted;
+        o.report.photons_in_view = c.photons_stored;
+        o.report.photon_map = Some(c);
         o.report.caustics = Some(snap.image);
     } else if let Some(snap) = o.snapshot.take() {
         let c = AapsCounters::from_snapshot(&snap);

@@ -1,6 +1,7 @@
 //! Live images for the inspector: a small compute pass colour-maps the inspected camera's
-//! caustics buffer (`Rgba32Float`, which egui cannot sample) and the fields of its AAPS task
-//! buffer atlas (storage buffers) into `Rgba16Float` `Image` assets that egui shows. It runs
+//! caustics buffer (`Rgba32Float`, which egui cannot sample), the fields of its AAPS task
+//! buffer atlas and its photon map (storage buffers) into `Rgba16Float` `Image` assets that
+//! egui shows. It runs
 //! only for the images the panel shows, after the composite, and records a GPU span
 //! (`caustics/inspector`).
 
@@ -24,6 +25,7 @@ use bevy::render::{RenderApp, RenderStartup};
 
 use crate::render::aaps::view::AapsViewState;
 use crate::render::image_space::view::ImageSpaceViewState;
+use crate::render::photon_map::view::PhotonMapViewState;
 use crate::render::volume::gpu::tile_stride;
 use crate::render::volume::view::VolumeStore;
 use crate::render::{ExtractedCaustics, ViewCausticsBuffer};
@@ -57,11 +59,15 @@ pub enum LiveKind {
     PhotonMap,
     /// Image space: the denoiser's colour history (lux).
     SvgfHistory,
+    /// Photon map: the gathered irradiance, the progressive mean (lux).
+    PhotonMapGathered,
+    /// Photon map: the grid's occupancy seen from above, photons per column of cells (x, z).
+    GridOccupancy,
 }
 
 impl LiveKind {
     /// All kinds, in the panel's order.
-    pub const ALL: [LiveKind; 9] = [
+    pub const ALL: [LiveKind; 11] = [
         Self::Caustics,
         Self::Density,
         Self::Area,
@@ -71,6 +77,8 @@ impl LiveKind {
         Self::RsmLayer,
         Self::PhotonMap,
         Self::SvgfHistory,
+        Self::PhotonMapGathered,
+        Self::GridOccupancy,
     ];
 
     /// Label.
@@ -85,14 +93,18 @@ impl LiveKind {
             Self::RsmLayer => "image-space RSM layer (normals)",
             Self::PhotonMap => "image-space raw photon map",
             Self::SvgfHistory => "image-space SVGF history",
+            Self::PhotonMapGathered => "photon-map gathered irradiance",
+            Self::GridOccupancy => "photon-map grid occupancy (top view)",
         }
     }
 
     /// Unit of the legend.
     pub fn unit(self) -> &'static str {
         match self {
-            Self::Caustics | Self::PhotonMap | Self::SvgfHistory => "lx",
-            Self::Density => "photons",
+            Self::Caustics | Self::PhotonMap | Self::SvgfHistory | Self::PhotonMapGathered => {
+                "lx"
+            }
+            Self::Density | Self::GridOccupancy => "photons",
             Self::Area => "px",
             Self::Variance | Self::SlabGBuffer | Self::RsmLayer => "",
             Self::ProjectorTiles => "photons",
@@ -102,7 +114,10 @@ impl LiveKind {
     /// The legend's default range (log scale).
     pub fn default_range(self) -> (f32, f32) {
         match self {
-            Self::Caustics | Self::PhotonMap | Self::SvgfHistory => (100.0, 1.0e6),
+            Self::Caustics | Self::PhotonMap | Self::SvgfHistory | Self::PhotonMapGathered => {
+                (100.0, 1.0e6)
+            }
+            Self::GridOccupancy => (0.5, 1.0e4),
             Self::RsmLayer => (1.0, 2.0),
             Self::Density => (0.1, 1.0e3),
             Self::Area => (0.01, 100.0),
@@ -113,7 +128,7 @@ impl LiveKind {
     }
 
     /// The shader's path: 0 a texture's luminance, 1 to 3 AAPS fields, 4 a G-buffer layer's
-    /// normals, 5 density tiles.
+    /// normals, 5 density tiles, 6 a per-pixel vec4 buffer's luminance, 7 grid occupancy.
     fn code(self) -> u32 {
         match self {
             Self::Caustics | Self::PhotonMap | Self::SvgfHistory => 0,
@@ -122,6 +137,8 @@ impl LiveKind {
             Self::Variance => 3,
             Self::SlabGBuffer | Self::RsmLayer => 4,
             Self::ProjectorTiles => 5,
+            Self::PhotonMapGathered => 6,
+            Self::GridOccupancy => 7,
         }
     }
 
@@ -265,6 +282,7 @@ fn colour_map_pass(
         &ExtractedCaustics,
         Option<&AapsViewState>,
         Option<&ImageSpaceViewState>,
+        Option<&PhotonMapViewState>,
     )>,
     volumes: Option<Res<VolumeStore>>,
     images: Option<Res<InspectorImages>>,
@@ -273,7 +291,7 @@ fn colour_map_pass(
     gpu_images: Res<RenderAssets<GpuImage>>,
     mut ctx: RenderContext,
 ) {
-    let (main, buffer, _, aaps, image_space) = view.into_inner();
+    let (main, buffer, _, aaps, image_space, photon_map) = view.into_inner();
     let (Some(images), Some(pipeline)) = (images, pipeline) else {
         return;
     };
@@ -343,6 +361,15 @@ fn colour_map_pass(
                 // Written this frame, at the parity the passes used (`frame & 1`).
                 let cur = (s.frame & 1) as usize;
                 (&s.history[cur].1, empty, empty, 0, s.key.size, 0)
+            }
+            LiveKind::PhotonMapGathered => {
+                let Some(s) = photon_map else { continue };
+                (&buffer.view, &s.accum, empty, 0, s.key.size, 0)
+            }
+            LiveKind::GridOccupancy => {
+                // The header (dims) as `density`, startIdx as `accum`.
+                let Some(s) = photon_map else { continue };
+                (&buffer.view, &s.header, &s.cells, 0, s.key.size, 0)
             }
         };
         let mut params = [0u8; 32];

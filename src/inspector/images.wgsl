@@ -7,14 +7,15 @@ struct InspectParams {
     // first word of the tile set (projector tiles).
     range: vec4<f32>,
     // x: what (0 caustics buffer, 1 density, 2 projected area, 3 variance, 4 slab G-buffer
-    // layer, 5 projector density tiles); y: atlas or tile-grid side; z, w: source texture
-    // width, height.
+    // layer, 5 projector density tiles, 6 the photon map's per-pixel mean, 7 the photon map's
+    // grid occupancy); y: atlas or tile-grid side; z, w: source texture width, height.
     what: vec4<u32>,
 }
 
 // The caustics buffer, or a volume's slab G-buffer layer.
 @group(0) @binding(0) var caustics: texture_2d<f32>;
-// The AAPS density atlas, or a volume's density tiles (u32 counts).
+// The AAPS density atlas, a volume's density tiles (u32 counts), the photon map's per-pixel
+// mean (vec4 per pixel) or its header (u32 words; `accum` is then startIdx).
 @group(0) @binding(1) var<storage, read> density: array<f32>;
 @group(0) @binding(2) var<storage, read> accum: array<u32>;
 @group(0) @binding(3) var<uniform> params: InspectParams;
@@ -69,6 +70,22 @@ fn colour_map(@builtin(global_invocation_id) id: vec3<u32>) {
         let src = vec2<u32>(uv * vec2<f32>(params.what.zw));
         let e = textureLoad(caustics, min(src, params.what.zw - 1u), 0).rgb;
         v = dot(e, vec3(0.2126, 0.7152, 0.0722));
+        zero = !(v > 0.0);
+    } else if params.what.x == 6u {
+        let src = min(vec2<u32>(uv * vec2<f32>(params.what.zw)), params.what.zw - 1u);
+        let i = 4u * (src.y * params.what.z + src.x);
+        v = dot(vec3(density[i], density[i + 1u], density[i + 2u]), vec3(0.2126, 0.7152, 0.0722));
+        zero = !(v > 0.0);
+    } else if params.what.x == 7u {
+        // H_DIMS (photon_map/photon.wgsl): X, Y, Z; the image spans x and z, summing over y.
+        let dims = vec3(bitcast<u32>(density[40]), bitcast<u32>(density[41]), bitcast<u32>(density[42]));
+        if all(dims > vec3(0u)) {
+            let c = min(vec2<u32>(uv * vec2<f32>(dims.xz)), dims.xz - 1u);
+            for (var y = 0u; y < min(dims.y, 4096u); y += 1u) {
+                let cell = (c.y * dims.y + y) * dims.x + c.x;
+                v += f32(accum[cell + 1u] - accum[cell]);
+            }
+        }
         zero = !(v > 0.0);
     } else if params.what.x == 5u {
         let a = max(params.what.y, 1u);

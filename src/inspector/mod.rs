@@ -424,6 +424,21 @@ fn pass_switches(world: &mut World, camera: Entity, ui: &mut egui::Ui) {
                 world.entity_mut(camera).insert(a);
             }
         }
+        crate::CausticsTechnique::PhotonMap => {
+            let a = world
+                .get::<crate::PhotonMapSettings>(camera)
+                .cloned()
+                .unwrap_or_default();
+            let mut progressive = a.progressive;
+            if ui
+                .checkbox(&mut progressive, "photon map progressive")
+                .changed()
+            {
+                let mut a = a;
+                a.progressive = progressive;
+                world.entity_mut(camera).insert(a);
+            }
+        }
         crate::CausticsTechnique::Reference => {}
     }
 }

@@ -16,6 +16,7 @@ mod fresnel;
 mod image_space;
 mod media;
 mod offset;
+mod photon_map;
 mod sampling;
 
 pub use aaps::*;
@@ -24,6 +25,7 @@ pub use fresnel::*;
 pub use image_space::*;
 pub use media::*;
 pub use offset::*;
+pub use photon_map::*;
 pub use sampling::*;
 
 use glam::Vec3;

@@ -8,7 +8,9 @@
 pub mod aaps;
 pub mod composite;
 pub mod image_space;
+pub mod photon_map;
 pub mod readback;
+pub mod trace;
 pub mod volume;
 
 use std::sync::{Arc, Mutex};
@@ -27,6 +29,7 @@ use bevy::render::{Render, RenderApp, RenderSystems};
 
 use crate::components::{
     AapsSettings, Caustics, CausticsDebugView, CausticsTechnique, ImageSpaceSettings,
+    PhotonMapSettings,
 };
 use crate::reference::{CausticImage, CausticsReferenceImage};
 
@@ -65,6 +68,8 @@ pub struct ExtractedCaustics {
     pub aaps: AapsSettings,
     /// Image-space settings (the camera's [`ImageSpaceSettings`] or the defaults).
     pub image_space: ImageSpaceSettings,
+    /// Photon-map settings (the camera's [`PhotonMapSettings`] or the defaults).
+    pub photon_map: PhotonMapSettings,
     /// Photon budget per light (the quality preset).
     pub photons_per_light: u64,
     /// Composite as if albedo were 1.
@@ -85,16 +90,18 @@ impl ExtractComponent for Caustics {
         Option<&'static CausticsReferenceImage>,
         Option<&'static AapsSettings>,
         Option<&'static ImageSpaceSettings>,
+        Option<&'static PhotonMapSettings>,
     );
     type QueryFilter = ();
     type Out = ExtractedCaustics;
 
     fn extract_component(
-        (c, reference, aaps, image_space): (
+        (c, reference, aaps, image_space, photon_map): (
             &Caustics,
             Option<&CausticsReferenceImage>,
             Option<&AapsSettings>,
             Option<&ImageSpaceSettings>,
+            Option<&PhotonMapSettings>,
         ),
     ) -> Option<Self::Out> {
         let reference = reference.map(|r| (r.image.clone(), r.serial));
@@ -107,6 +114,7 @@ impl ExtractComponent for Caustics {
             technique: c.technique,
             aaps: aaps.cloned().unwrap_or_default(),
             image_space: image_space.cloned().unwrap_or_default(),
+            photon_map: photon_map.cloned().unwrap_or_default(),
             photons_per_light: c.quality.photons_per_light(),
             white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
             hidden: c.debug_view == CausticsDebugView::Hidden,
@@ -252,8 +260,10 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
     composite::build(app);
     if aaps::build(app) {
+        trace::build(app);
         volume::build(app);
         image_space::build(app);
+        photon_map::build(app);
     }
     readback::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {

@@ -16,6 +16,7 @@ use bevy::render::renderer::{RenderContext, ViewQuery};
 
 use super::aaps::view::{AapsViewState, SPLAT_GUARD_SPLATS};
 use super::image_space::view::ImageSpaceViewState;
+use super::photon_map::view::PhotonMapViewState;
 use super::volume::gpu::CNT;
 use super::volume::view::{VolumeStore, VolumeViewState};
 use super::{ExtractedCaustics, ViewCausticsBuffer};
@@ -110,12 +111,13 @@ fn copy_for_readback(
         Option<&AapsViewState>,
         Option<&VolumeViewState>,
         Option<&ImageSpaceViewState>,
+        Option<&PhotonMapViewState>,
     )>,
     volumes: Option<Res<VolumeStore>>,
     readback: Res<CausticsReadback>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, _, aaps, volume, image_space) = view.into_inner();
+    let (buffer, _, aaps, volume, image_space, photon_map) = view.into_inner();
     let Ok(mut s) = readback.0.lock() else {
         return;
     };
@@ -184,6 +186,15 @@ fn copy_for_readback(
     if let Some(state) = image_space {
         encoder.copy_buffer_to_buffer(
             &state.counters,
+            0,
+            &staging,
+            image_bytes,
+            Some((COUNTER_WORDS * 4) as u64),
+        );
+    }
+    if let Some(state) = photon_map {
+        encoder.copy_buffer_to_buffer(
+            &state.header,
             0,
             &staging,
             image_bytes,

@@ -1,8 +1,8 @@
 //! The image-space optics core at its extremes, the RSM views, and the settings' validation.
 
 use bevy_caustics::optics::*;
-use bevy_caustics::render::aaps::scene::AapsLight;
 use bevy_caustics::render::image_space::view::{rsm_light, rsm_sources};
+use bevy_caustics::render::trace::scene::GpuLight;
 use glam::{Vec3, Vec4};
 
 /// Eq. 2: the crossing of two linear segments, exact in the middle, guarded at the extremes.
@@ -108,8 +108,8 @@ fn light_cones() {
     assert_eq!(photon_flux_scale(65536.0, 16384.0), 4.0);
 }
 
-fn point(position: Vec3) -> AapsLight {
-    AapsLight {
+fn point(position: Vec3) -> GpuLight {
+    GpuLight {
         position,
         kind: 1,
         axis: Vec3::NEG_Y,

@@ -1,10 +1,7 @@
-// Bindings and counters shared by the AAPS compute passes (group 0; bvh.wgsl holds 0 to 4 and
-// quadtree.wgsl binding 7). Concatenated after bvh.wgsl, optics.wgsl, quadtree.wgsl and
-// params.wgsl by src/render/aaps/pipelines.rs.
+// Bindings and counters shared by the AAPS compute passes (group 0; the shared tracer,
+// src/render/trace/, holds 0 to 6 and 8, quadtree.wgsl binding 7). Concatenated after the
+// tracer's WGSL, quadtree.wgsl and params.wgsl by src/render/aaps/pipelines.rs.
 
-@group(0) @binding(5) var<storage, read> bvh_normals: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> materials: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read> lights: array<AapsLight>;
 @group(0) @binding(9) var<uniform> params: AapsParams;
 @group(0) @binding(10) var<storage, read_write> splats: array<AapsSplat>;
 @group(0) @binding(11) var<storage, read_write> accum: array<atomic<u32>>;
@@ -12,23 +9,6 @@
 @group(0) @binding(13) var<storage, read_write> density_next: array<f32>;
 @group(0) @binding(14) var caustics_now: texture_2d<f32>;
 @group(0) @binding(15) var caustics_prev: texture_2d<f32>;
-
-// One light (80 bytes, `AapsLight` in src/render/aaps/scene.rs).
-struct AapsLight {
-    position: vec4<f32>, // xyz: point/spot position or the directional grid's corner; w kind
-    axis: vec4<f32>,     // xyz: travel direction (directional) or spot axis; w cos outer
-    side_u: vec4<f32>,   // directional grid edge along u; w cos inner
-    side_v: vec4<f32>,   // directional grid edge along v
-    power: vec4<f32>,    // rgb: power over the whole parameter square (lm or lux m^2)
-}
-
-const LIGHT_DIRECTIONAL: u32 = 0u;
-const LIGHT_POINT: u32 = 1u;
-const LIGHT_SPOT: u32 = 2u;
-
-const MAT_DIFFUSE: u32 = 0u;
-const MAT_DIELECTRIC: u32 = 1u;
-const MAT_CONDUCTOR: u32 = 2u;
 
 // Counters (u32 words of `accum`; `AapsStats` in src/render/aaps/mod.rs reads the same).
 const C_TASKS: u32 = 0u;          // photons the quadtree asks for
@@ -69,10 +49,6 @@ fn accum_add_f32(i: u32, v: f32) {
 
 fn accum_f32(i: u32) -> f32 {
     return bitcast<f32>(atomicLoad(&accum[i]));
-}
-
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3(0.2126, 0.7152, 0.0722));
 }
 
 // The light index of an atlas texel (or a value >= lights for an unused tile).

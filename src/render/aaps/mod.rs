@@ -10,7 +10,6 @@
 
 pub mod passes;
 pub mod pipelines;
-pub mod scene;
 pub mod view;
 
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
@@ -18,11 +17,8 @@ use bevy::pbr::deferred::deferred_lighting;
 use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureFormatFeatureFlags, WgpuFeatures};
 use bevy::render::renderer::{RenderAdapter, RenderDevice};
-use bevy::render::{ExtractSchedule, MainWorld, Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
 use bevy::shader::Shader;
-
-use crate::scene::CausticsScene;
-use scene::ExtractedCausticsScene;
 
 /// What the adapter offers AAPS (render world).
 #[derive(Resource, Clone, Debug, Default)]
@@ -45,22 +41,8 @@ pub fn missing_aaps_capabilities(features: WgpuFeatures, storage_buffers: u32) -
     missing
 }
 
-fn extract_scene(
-    mut commands: Commands,
-    main: Res<MainWorld>,
-    current: Option<Res<ExtractedCausticsScene>>,
-) {
-    let Some(scene) = main.get_resource::<CausticsScene>() else {
-        return;
-    };
-    if current.is_some_and(|c| c.0.generation == scene.generation) {
-        return;
-    }
-    commands.insert_resource(ExtractedCausticsScene(scene.clone()));
-}
-
 /// Render-app part; called from [`crate::render::build`] after the capability gate.
-/// Returns whether AAPS (and so the shared scene extraction) is on.
+/// Returns whether AAPS (and so the GPU techniques that share its gate) is on.
 pub(crate) fn build(app: &mut App) -> bool {
     let (features, storage, msaa) = {
         let Some(render_app) = app.get_sub_app(RenderApp) else {
@@ -119,13 +101,11 @@ pub(crate) fn build(app: &mut App) -> bool {
         .insert_resource(shaders)
         .insert_resource(AapsSupport { msaa })
         .add_systems(RenderStartup, pipelines::init_aaps_pipelines)
-        .add_systems(ExtractSchedule, extract_scene)
         .add_systems(
             Render,
-            (view::prepare_aaps_scene, view::prepare_aaps_views)
-                .chain()
+            view::prepare_aaps_views
                 .in_set(RenderSystems::PrepareResources)
-                .after(super::prepare_caustics_buffers),
+                .after(super::trace::prepare_trace_scene),
         )
         .add_systems(
             Core3d,

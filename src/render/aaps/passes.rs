@@ -13,8 +13,8 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 
 use super::pipelines::AapsPipelines;
-use super::scene::AapsSceneBuffers;
 use super::view::{AapsFrame, AapsViewState, LEVEL_STRIDE};
+use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
 /// GPU span and log names of the passes.
@@ -61,7 +61,7 @@ pub fn aaps_passes(
         &AapsViewState,
         &AapsFrame,
     )>,
-    scene: Option<Res<AapsSceneBuffers>>,
+    scene: Option<Res<TraceSceneBuffers>>,
     pipelines: Res<AapsPipelines>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
@@ -230,7 +230,7 @@ fn bind_groups(
     device: &RenderDevice,
     cache: &PipelineCache,
     pipelines: &AapsPipelines,
-    scene: &AapsSceneBuffers,
+    scene: &TraceSceneBuffers,
     state: &AapsViewState,
     buffer: &ViewCausticsBuffer,
     depth: &TextureView,

@@ -1,5 +1,6 @@
-//! The AAPS pipelines: one compute module (BVH, optics, quadtree, trace and task-buffer
-//! entry points, concatenated from the WGSL files beside this one and in `src/render/`) and
+//! The AAPS pipelines: one compute module (the shared tracer's WGSL, quadtree, trace and
+//! task-buffer entry points, concatenated from the WGSL files beside this one and in
+//! `src/render/`) and
 //! the splat raster module; created in `RenderStartup`.
 
 use bevy::prelude::*;
@@ -16,8 +17,7 @@ use crate::render::CAUSTICS_BUFFER_FORMAT;
 /// The WGSL of the compute module.
 pub fn compute_source() -> String {
     [
-        include_str!("../bvh.wgsl"),
-        include_str!("../optics.wgsl"),
+        crate::render::trace::tracer_source().as_str(),
         include_str!("../quadtree.wgsl"),
         include_str!("params.wgsl"),
         include_str!("common.wgsl"),

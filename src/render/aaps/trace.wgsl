@@ -10,9 +10,6 @@
 // (43 % of a brilliant's caustic). Choosing by Fresnel probability keeps the expected energy of
 // every path (unbiased Russian roulette on the branch, TIR still always reflects).
 
-const INVALID: u32 = 0xffffffffu;
-const TRACE_PI: f32 = 3.14159265358979;
-
 struct Path {
     o: vec3<f32>,
     d: vec3<f32>,
@@ -28,29 +25,6 @@ struct Path {
     split: u32,
     // The photon's task id: the key of its random branch choices.
     task: u32,
-}
-
-fn finite3(v: vec3<f32>) -> bool {
-    return all(abs(v) <= vec3(3.0e38));
-}
-
-fn object_point(inst: BvhInstance, p: vec3<f32>) -> vec3<f32> {
-    let q = vec4(p, 1.0);
-    return vec3(dot(inst.row0, q), dot(inst.row1, q), dot(inst.row2, q));
-}
-
-// World normal of an object-space normal: the transpose of local_from_world's linear part.
-fn world_normal(inst: BvhInstance, n: vec3<f32>) -> vec3<f32> {
-    let w = inst.row0.xyz * n.x + inst.row1.xyz * n.y + inst.row2.xyz * n.z;
-    let l = length(w);
-    return select(vec3(0.0), w / l, l > 0.0 && l < 3.0e38);
-}
-
-// Interpolated shading normal of triangle `slot` at barycentrics (u, v), world space.
-fn shading_normal(inst: BvhInstance, slot: u32, uv: vec2<f32>) -> vec3<f32> {
-    let n = bvh_normals[3u * slot] * (1.0 - uv.x - uv.y) + bvh_normals[3u * slot + 1u] * uv.x
-        + bvh_normals[3u * slot + 2u] * uv.y;
-    return world_normal(inst, n.xyz);
 }
 
 // Barycentrics of a world point in the plane of triangle `slot` (extrapolated outside it):
@@ -78,22 +52,6 @@ fn differential_normal(inst: BvhInstance, slot: u32, p: vec3<f32>, ns_f: vec3<f3
     var n = shading_normal(inst, slot, plane_barycentrics(inst, slot, p));
     n = select(n, -n, dot(n, ns_f) < 0.0);
     return select(ns_f, n, dot(n, ns_f) > 0.5);
-}
-
-// reflect_guarded (src/reference/tracer.rs): about the shading normal unless that sends the
-// ray into the surface, then about the geometric normal.
-fn reflect_guarded(d: vec3<f32>, ns_f: vec3<f32>, ng_f: vec3<f32>) -> vec3<f32> {
-    let r = optics_reflect(d, ns_f);
-    return select(optics_reflect(d, ng_f), r, dot(r, ng_f) > 0.0);
-}
-
-// Refraction with the tracer's geometric-normal fallback; w = 0 when both fail (TIR).
-fn refract_guarded(d: vec3<f32>, ns_f: vec3<f32>, ng_f: vec3<f32>, eta: f32) -> vec4<f32> {
-    let t = optics_refract(d, ns_f, eta);
-    if t.w > 0.0 && dot(t.xyz, ng_f) < 0.0 {
-        return t;
-    }
-    return optics_refract(d, ng_f, eta);
 }
 
 // Append the splat of a photon that reached a diffuse surface (sections 3.1.2, 3.3.5).
@@ -210,22 +168,18 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             let mm = materials[3u * (*path).medium];
             (*path).flux *= optics_beer_lambert(materials[3u * (*path).medium + 1u].xyz, mm.w, hit.t);
         }
-        let pos = (*path).o + (*path).d * hit.t;
-        let inst = bvh_instances[hit.instance];
-        let ng = world_normal(inst, cross(bvh_triangles[3u * hit.slot + 1u].xyz, bvh_triangles[3u * hit.slot + 2u].xyz));
-        var ns = shading_normal(inst, hit.slot, hit.uv);
-        if !finite3(pos) || all(ng == vec3(0.0)) {
+        let sh = surface_hit(hit, (*path).o, (*path).d);
+        if !sh.ok {
             atomicAdd(&accum[C_NAN], 1u);
             return;
         }
-        if all(ns == vec3(0.0)) {
-            ns = ng;
-        }
+        let inst = bvh_instances[hit.instance];
+        let pos = sh.pos;
+        let ng = sh.ng;
         let d = (*path).d;
-        let entering = dot(d, ng) < 0.0;
-        let ng_f = select(-ng, ng, entering);
-        let flip = dot(d, ns) > 0.0;
-        let ns_f = select(ns, -ns, flip);
+        let entering = sh.entering;
+        let ng_f = sh.ng_f;
+        let ns_f = sh.ns_f;
         let tu = optics_transfer_to_plane((*path).ou, (*path).du, pos, ng);
         let tv = optics_transfer_to_plane((*path).ov, (*path).dv, pos, ng);
         if tu.w == 0.0 || tv.w == 0.0 {
@@ -333,7 +287,6 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let uv_u = vec2(select(uv.x + delta, uv.x - delta, uv.x + delta > 1.0), uv.y);
     let uv_v = vec2(uv.x, select(uv.y + delta, uv.y - delta, uv.y + delta > 1.0));
     let light = lights[light_index];
-    let kind = bitcast<u32>(light.position.w);
     // Section 3.2.1: power / partitions / photons in the partition.
     let texel_power = light.power.xyz / f32(tile * tile);
     var path: Path;
@@ -342,25 +295,17 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     path.bounces = 0u;
     path.split = 0u;
     path.task = task;
-    if kind == LIGHT_DIRECTIONAL {
-        let p0 = light.position.xyz;
-        path.o = p0 + uv.x * light.side_u.xyz + uv.y * light.side_v.xyz;
-        path.ou = p0 + uv_u.x * light.side_u.xyz + uv_u.y * light.side_v.xyz;
-        path.ov = p0 + uv_v.x * light.side_u.xyz + uv_v.y * light.side_v.xyz;
-        path.d = light.axis.xyz;
-        path.du = path.d;
-        path.dv = path.d;
-    } else {
-        path.o = light.position.xyz;
-        path.ou = path.o;
-        path.ov = path.o;
-        path.d = optics_equal_area_square_to_sphere(uv);
-        path.du = optics_equal_area_square_to_sphere(uv_u);
-        path.dv = optics_equal_area_square_to_sphere(uv_v);
-        if kind == LIGHT_SPOT {
-            path.flux *= optics_spot_attenuation(dot(path.d, light.axis.xyz), light.side_u.w, light.axis.w);
-        }
-    }
+    // The differential rays leave the light at the neighbouring parameters.
+    let e = light_emit(light, uv);
+    let eu = light_emit(light, uv_u);
+    let ev = light_emit(light, uv_v);
+    path.o = e.o;
+    path.d = e.d;
+    path.ou = eu.o;
+    path.du = eu.d;
+    path.ov = ev.o;
+    path.dv = ev.d;
+    path.flux *= e.weight;
     path.seg_start = path.o;
     if all(path.flux <= vec3(0.0)) {
         return;

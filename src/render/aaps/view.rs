@@ -10,9 +10,9 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::view::ExtractedView;
 
-use super::scene::{AapsSceneBuffers, ExtractedCausticsScene};
 use crate::components::{AapsSettings, CausticsTechnique};
 use crate::optics::uniform_density;
+use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CAUSTICS_BUFFER_FORMAT, ExtractedCaustics};
 
 /// Bytes of the `accum` buffer before the per-texel entries (`ACCUM_TEXELS` words).
@@ -337,7 +337,7 @@ pub fn prepare_aaps_views(
     mut commands: Commands,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
-    scene: Option<Res<AapsSceneBuffers>>,
+    scene: Option<Res<TraceSceneBuffers>>,
     support: Res<super::AapsSupport>,
     limits: Res<crate::limits::CausticsLimits>,
     mut views: Query<(
@@ -414,42 +414,5 @@ pub fn prepare_aaps_views(
             e.insert(s);
         }
         e.insert(AapsFrame);
-    }
-}
-
-/// Upload the scene when it changed and a view uses AAPS; drop it when none does.
-pub fn prepare_aaps_scene(
-    mut commands: Commands,
-    device: Res<RenderDevice>,
-    extracted: Option<Res<ExtractedCausticsScene>>,
-    buffers: Option<Res<AapsSceneBuffers>>,
-    views: Query<&ExtractedCaustics>,
-    // The last generation found to have nothing for AAPS (no light reaches a caster).
-    mut idle: Local<Option<u64>>,
-) {
-    let wanted = views.iter().any(|c| c.technique == CausticsTechnique::Aaps);
-    let Some(extracted) = extracted.filter(|_| wanted) else {
-        if buffers.is_some() {
-            commands.remove_resource::<AapsSceneBuffers>();
-        }
-        *idle = None;
-        return;
-    };
-    // Everything below runs once per scene generation, not per frame.
-    let generation = extracted.0.generation;
-    if buffers.as_ref().is_some_and(|b| b.generation == generation) || *idle == Some(generation) {
-        return;
-    }
-    match AapsSceneBuffers::upload(&device, &extracted.0) {
-        Some(b) => {
-            commands.insert_resource(b);
-            *idle = None;
-        }
-        None => {
-            if buffers.is_some() {
-                commands.remove_resource::<AapsSceneBuffers>();
-            }
-            *idle = Some(generation);
-        }
     }
 }

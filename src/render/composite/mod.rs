@@ -28,6 +28,7 @@ use bevy::shader::Shader;
 
 use super::aaps::view::AapsFrame;
 use super::image_space::view::ImageSpaceFrame;
+use super::photon_map::view::PhotonMapFrame;
 use super::volume::view::VolumeViewFrame;
 use super::{CausticsDispatchLog, ExtractedCaustics, ViewCausticsBuffer};
 use crate::components::CausticsTechnique;
@@ -131,13 +132,14 @@ pub fn composite_caustics(
         Option<&AapsFrame>,
         Option<&VolumeViewFrame>,
         Option<&ImageSpaceFrame>,
+        Option<&PhotonMapFrame>,
     )>,
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,
     log: Res<CausticsDispatchLog>,
     mut ctx: RenderContext,
 ) {
-    let (target, prepass, buffer, camera, caustics, id, aaps, volume, image_space) =
+    let (target, prepass, buffer, camera, caustics, id, aaps, volume, image_space, photon_map) =
         view.into_inner();
     let (Some(render_pipeline), Some(gbuffer)) =
         (cache.get_render_pipeline(**id), prepass.deferred_view())
@@ -153,6 +155,8 @@ pub fn composite_caustics(
         CausticsTechnique::Volume => volume.is_some(),
         // Image-space tracing fills it this frame, or no light reaches a caster.
         CausticsTechnique::ImageSpace => image_space.is_some(),
+        // The photon map fills it this frame, or no light reaches a caster.
+        CausticsTechnique::PhotonMap => photon_map.is_some(),
     };
     if !filled || caustics.hidden {
         return;

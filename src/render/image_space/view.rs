@@ -14,7 +14,7 @@ use bevy::render::view::ExtractedView;
 use super::pipelines::{RSM_DEPTH_FORMAT, RSM_FORMAT};
 use crate::components::{CausticsTechnique, ImageSpaceSettings};
 use crate::optics::{cone_around_sphere, photon_flux_scale};
-use crate::render::aaps::scene::{AapsLight, ExtractedCausticsScene, aaps_lights, caster_sphere};
+use crate::render::trace::scene::{ExtractedCausticsScene, GpuLight, caster_sphere, gpu_lights};
 use crate::render::volume::gpu::VolumeScene;
 use crate::render::{ExtractedCaustics, view_texture};
 
@@ -142,7 +142,7 @@ pub struct RsmLight {
     /// Viewing direction.
     pub axis: Vec3,
     /// The GPU light it came from.
-    pub light: AapsLight,
+    pub light: GpuLight,
 }
 
 /// Widest cone a point or spot light's single RSM covers; a light that needs more (the
@@ -154,9 +154,9 @@ pub const MAX_CONE_HALF_ANGLE: f32 = 60.0 * std::f32::consts::PI / 180.0;
 /// (`centre`, `radius`) is wider than [`MAX_CONE_HALF_ANGLE`] from it (or holds it) gets
 /// the six faces of a cube, which tile every direction once.
 pub fn rsm_sources(
-    lights: &[AapsLight],
+    lights: &[GpuLight],
     (centre, radius): (Vec3, f32),
-) -> Vec<(AapsLight, Option<u8>)> {
+) -> Vec<(GpuLight, Option<u8>)> {
     let mut out = Vec::new();
     for l in lights {
         let needed = if l.kind == 0 {
@@ -193,7 +193,7 @@ pub fn rsm_sources(
 /// that holds the casters' sphere ([`cone_around_sphere`]); spot: the same, at most its outer
 /// angle; a cube face: 90 degrees around its axis.
 pub fn rsm_light(
-    light: &AapsLight,
+    light: &GpuLight,
     face: Option<u8>,
     (centre, radius): (Vec3, f32),
     (scene_centre, scene_radius): (Vec3, f32),
@@ -319,7 +319,7 @@ pub struct ImageSpaceScene {
     pub scene: VolumeScene,
     /// The RSM views: lights that reach a caster, in the AAPS light order, with their cube
     /// face ([`rsm_sources`]).
-    pub lights: Vec<(AapsLight, Option<u8>)>,
+    pub lights: Vec<(GpuLight, Option<u8>)>,
     /// Casters' bounding sphere.
     pub casters: (Vec3, f32),
     /// The scene's bounding sphere.
@@ -355,7 +355,7 @@ pub fn prepare_image_space_scene(
         return;
     }
     let tlas = &extracted.0.tlas;
-    let lights: Vec<AapsLight> = aaps_lights(tlas, &extracted.0.lights)
+    let lights: Vec<GpuLight> = gpu_lights(tlas, &extracted.0.lights)
         .into_iter()
         .map(|(_, l)| l)
         .collect();

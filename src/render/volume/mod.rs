@@ -69,7 +69,7 @@ pub(crate) fn build(app: &mut App) {
             view::prepare_volumes
                 .in_set(RenderSystems::PrepareResources)
                 .after(super::prepare_caustics_buffers)
-                .after(super::aaps::view::prepare_aaps_scene),
+                .after(super::trace::prepare_trace_scene),
         )
         .add_systems(
             Core3d,

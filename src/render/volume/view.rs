@@ -17,7 +17,7 @@ use super::gpu::{
 };
 use crate::components::{CausticsTechnique, CausticsVolume};
 use crate::render::ExtractedCaustics;
-use crate::render::aaps::scene::ExtractedCausticsScene;
+use crate::render::trace::scene::ExtractedCausticsScene;
 use crate::volume::{VolumeFrame, schedule_run};
 
 /// The main world's volumes (entity, settings, world from volume).

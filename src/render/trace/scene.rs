@@ -1,5 +1,6 @@
-//! The GPU scene of AAPS: the flattened two-level BVH with its normals and material table
-//! (uploaded only when the gathered scene changes and a camera uses AAPS), and the light table.
+//! The GPU scene shared by the BVH techniques (AAPS, the photon map): the flattened two-level
+//! BVH with its normals and material table (uploaded only when the gathered scene changes and
+//! a camera uses one of them), and the light table.
 
 use bevy::prelude::*;
 use bevy::render::render_resource::{Buffer, BufferInitDescriptor, BufferUsages};
@@ -9,9 +10,9 @@ use glam::Vec3;
 use crate::optics;
 use crate::scene::{CausticsScene, GpuBvh, Tlas, TraceLight};
 
-/// One light on the GPU (80 bytes; `AapsLight` in common.wgsl).
+/// One light on the GPU (80 bytes; `GpuLight` in surface.wgsl).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AapsLight {
+pub struct GpuLight {
     /// Point/spot position, or the corner of a directional light's origin grid.
     pub position: Vec3,
     /// 0 directional, 1 point, 2 spot.
@@ -31,7 +32,7 @@ pub struct AapsLight {
     pub power: Vec3,
 }
 
-impl AapsLight {
+impl GpuLight {
     /// The 80 bytes of the GPU layout.
     pub fn bytes(&self) -> Vec<u8> {
         let f = [
@@ -98,7 +99,7 @@ pub fn reaches_casters(light: &TraceLight, tlas: &Tlas) -> bool {
 /// entity of each. A directional light's origin grid is the square of side `2r` around the
 /// casters' bounding sphere (centre `c`, radius `r`), perpendicular to the light, placed
 /// before the whole scene (like the reference tracer's disc).
-pub fn aaps_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity, AapsLight)> {
+pub fn gpu_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity, GpuLight)> {
     let Some((c, r)) = caster_sphere(tlas) else {
         return Vec::new();
     };
@@ -120,7 +121,7 @@ pub fn aaps_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity,
                 };
                 let (t, b) = optics::orthonormal_basis(d);
                 let start = c - d * (scene_radius * 2.0 + r);
-                AapsLight {
+                GpuLight {
                     position: start - t * r - b * r,
                     kind: 0,
                     axis: d,
@@ -131,7 +132,7 @@ pub fn aaps_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity,
                     power: illuminance * 4.0 * r * r,
                 }
             }
-            TraceLight::Point { position, flux } => AapsLight {
+            TraceLight::Point { position, flux } => GpuLight {
                 position,
                 kind: 1,
                 axis: Vec3::Z,
@@ -147,7 +148,7 @@ pub fn aaps_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity,
                 flux,
                 inner_angle,
                 outer_angle,
-            } => AapsLight {
+            } => GpuLight {
                 position,
                 kind: 2,
                 axis: direction.try_normalize().unwrap_or(Vec3::NEG_Z),
@@ -166,9 +167,9 @@ pub fn aaps_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity,
 }
 
 /// The scene in GPU buffers (render world), rebuilt when the gathered scene's generation
-/// changes and a camera uses AAPS.
+/// changes and a camera uses a BVH technique.
 #[derive(Resource)]
-pub struct AapsSceneBuffers {
+pub struct TraceSceneBuffers {
     /// Generation of the scene uploaded.
     pub generation: u64,
     /// bvh nodes, triangles, instances, TLAS nodes, TLAS prims, normals, materials, lights.
@@ -177,6 +178,8 @@ pub struct AapsSceneBuffers {
     pub lights: u32,
     /// Extent of the scene, metres (ray offsets).
     pub scene_scale: f32,
+    /// The casters' bounding sphere: centre and radius, metres.
+    pub casters: (Vec3, f32),
 }
 
 /// The render world's copy of the gathered scene.
@@ -190,11 +193,11 @@ fn f4(v: &[[f32; 4]]) -> Vec<u8> {
     b
 }
 
-impl AapsSceneBuffers {
+impl TraceSceneBuffers {
     /// Flatten and upload `scene`; `None` when no caustic light reaches a caster (nothing for
-    /// AAPS to do).
+    /// a photon tracer to do).
     pub fn upload(device: &RenderDevice, scene: &CausticsScene) -> Option<Self> {
-        let lights = aaps_lights(&scene.tlas, &scene.lights);
+        let lights = gpu_lights(&scene.tlas, &scene.lights);
         if lights.is_empty() {
             return None;
         }
@@ -220,14 +223,14 @@ impl AapsSceneBuffers {
             light_bytes,
         ];
         let names = [
-            "caustics:aaps:bvh_nodes",
-            "caustics:aaps:bvh_triangles",
-            "caustics:aaps:bvh_instances",
-            "caustics:aaps:tlas_nodes",
-            "caustics:aaps:tlas_prims",
-            "caustics:aaps:normals",
-            "caustics:aaps:materials",
-            "caustics:aaps:lights",
+            "caustics:trace:bvh_nodes",
+            "caustics:trace:bvh_triangles",
+            "caustics:trace:bvh_instances",
+            "caustics:trace:tlas_nodes",
+            "caustics:trace:tlas_prims",
+            "caustics:trace:normals",
+            "caustics:trace:materials",
+            "caustics:trace:lights",
         ];
         let buffers = std::array::from_fn(|i| {
             device.create_buffer_with_data(&BufferInitDescriptor {
@@ -245,6 +248,7 @@ impl AapsSceneBuffers {
             buffers,
             lights: lights.len() as u32,
             scene_scale,
+            casters: caster_sphere(&scene.tlas).unwrap_or((Vec3::ZERO, 1.0)),
         })
     }
 }

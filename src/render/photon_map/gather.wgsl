@@ -1,0 +1,275 @@
+// The photon map's gather (seed 001 section 3.2): per caustics-camera pixel, the point and
+// normal from the depth prepass and the deferred G-buffer, then every photon of the 9 row
+// ranges of its 3x3x3 cells within r (no k-nearest heap) whose normal agrees with the pixel's,
+// weighted by the normalised Epanechnikov kernel (optics::gather_kernel). With FLAG_ACCUMULATE
+// the result is blended into the running mean of the progressive frames. Appended to
+// trace.wgsl (same module and bindings).
+
+@group(0) @binding(12) var<storage, read> sorted: array<Photon>;
+@group(0) @binding(13) var<storage, read> cells: array<u32>;
+// Per pixel: rgb the mean irradiance (lux) over the accumulated frames, w the distance from
+// the eye to the pixel's point (the stereo pair's depth test).
+@group(0) @binding(14) var<storage, read_write> accum: array<vec4<f32>>;
+@group(0) @binding(15) var view_depth: texture_depth_2d;
+@group(0) @binding(16) var gbuffer: texture_2d<u32>;
+@group(0) @binding(17) var out_caustics: texture_storage_2d<rgba32float, write>;
+
+// Pixel to world through the prepass depth (reverse-Z NDC); w = 0 where nothing was drawn.
+fn pixel_point(p: vec2<i32>, size: vec2<f32>) -> vec4<f32> {
+    let z = textureLoad(view_depth, p, 0);
+    if !(z > 0.0) {
+        return vec4(0.0);
+    }
+    let ndc = vec2((f32(p.x) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(p.y) + 0.5) / size.y * 2.0);
+    let h = params.world_from_clip * vec4(ndc, z, 1.0);
+    let x = h.xyz / h.w;
+    return select(vec4(0.0), vec4(x, 1.0), finite3(x) && h.w != 0.0);
+}
+
+struct GatherResult {
+    e: vec3<f32>,
+    visited: u32,
+    used: u32,
+    rejected: u32,
+}
+
+// The centre cell of the 3x3x3 neighbourhood of x (optics::GridLayout::rows); w = 0: empty grid.
+fn gather_centre(x: vec3<f32>) -> vec4<u32> {
+    let dims = vec3(atomicLoad(&header[H_DIMS]), atomicLoad(&header[H_DIMS + 1u]), atomicLoad(&header[H_DIMS + 2u]));
+    if any(dims < vec3(3u)) {
+        return vec4(0u);
+    }
+    let origin = vec3(bitcast<f32>(atomicLoad(&header[H_ORIGIN])), bitcast<f32>(atomicLoad(&header[H_ORIGIN + 1u])), bitcast<f32>(atomicLoad(&header[H_ORIGIN + 2u])));
+    let inv = bitcast<f32>(atomicLoad(&header[H_INV]));
+    let f = clamp(floor((x - origin) * inv), vec3(1.0), vec3<f32>(dims - vec3(2u)));
+    return vec4(vec3<u32>(f), 1u);
+}
+
+// The first cell of row k (0..9) of the neighbourhood around centre c.
+fn gather_row(c: vec3<u32>, k: u32) -> u32 {
+    let dx = atomicLoad(&header[H_DIMS]);
+    let dy = atomicLoad(&header[H_DIMS + 1u]);
+    return ((c.z + k / 3u - 1u) * dy + (c.y + k % 3u - 1u)) * dx + c.x - 1u;
+}
+
+fn gather_photon(p: Photon, x: vec3<f32>, n: vec3<f32>, r2: f32, g: ptr<function, GatherResult>) {
+    let v = p.pos - x;
+    let d2 = dot(v, v);
+    if d2 < r2 {
+        if dot(oct_decode(p.normal), n) >= params.view.w {
+            (*g).used += 1u;
+            (*g).e += p.flux * gather_kernel(d2, r2);
+        } else {
+            (*g).rejected += 1u;
+        }
+    }
+}
+
+// The radius at point x seen from the eye (optics::gather_radius with the pixel footprint).
+fn pixel_radius(x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let r = sqrt(params.view.z);
+    let cell = bitcast<f32>(atomicLoad(&header[H_CELL]));
+    var area = 0.0;
+    if params.lens.z != 0.0 {
+        let to = x - params.eye.xyz;
+        let dist = length(to);
+        let cos_alpha = dot(to / dist, params.forward.xyz);
+        let cos_surface = dot(n, -to / dist);
+        area = optics_pixel_footprint_area(dist, cos_alpha, cos_surface, params.lens.xy);
+    }
+    return gather_radius(r, area, cell);
+}
+
+// optics::gather: every photon of the 9 row ranges within radius r.
+fn gather_at(x: vec3<f32>, n: vec3<f32>, r: f32) -> GatherResult {
+    var g: GatherResult;
+    let c = gather_centre(x);
+    if c.w == 0u {
+        return g;
+    }
+    let r2 = r * r;
+    for (var k = 0u; k < 9u; k += 1u) {
+        let first = gather_row(c.xyz, k);
+        let a = cells[first];
+        let b = cells[first + 3u];
+        g.visited += b - a;
+        for (var i = a; i < b; i += 1u) {
+            gather_photon(sorted[i], x, n, r2, &g);
+        }
+    }
+    return g;
+}
+
+fn count_gather(g: GatherResult) {
+    atomicAdd(&header[C_PIXELS], 1u);
+    atomicAdd(&header[C_VISITED], g.visited);
+    atomicAdd(&header[C_USED], g.used);
+    atomicAdd(&header[C_NORMAL_REJECTS], g.rejected);
+    atomicMax(&header[C_USED_MAX], g.used);
+    atomicMax(&header[C_VISITED_MAX], g.visited);
+}
+
+// Blend this frame's irradiance into the pixel's running mean and write the caustics buffer.
+fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32) {
+    let idx = u32(p.y) * u32(params.view.x) + u32(p.x);
+    let e = select(vec3(0.0), e_in, finite3(e_in));
+    var mean = e;
+    if (params.frame.w & FLAG_ACCUMULATE) != 0u {
+        let prev = accum[idx].xyz;
+        mean = prev + (e - prev) * params.gather.x;
+    }
+    accum[idx] = vec4(mean, dist);
+    textureStore(out_caustics, p, vec4(mean, 1.0));
+}
+
+// Algorithm 1 of the seed, generalised to an 8x8 tile: when every pixel of the tile that has a
+// surface falls into the same centre cell, the tile loads the photons of its 9 row ranges into
+// workgroup memory together, 256 at a time, and each pixel tests them from there.
+const TILE_PHOTONS: u32 = 256u;
+var<workgroup> tile_photons: array<Photon, 256>;
+var<workgroup> tile_min: atomic<u32>;
+var<workgroup> tile_max: atomic<u32>;
+var<workgroup> tile_key: u32;
+var<workgroup> tile_range: vec2<u32>;
+
+struct PixelInput {
+    p: vec2<i32>,
+    // false: outside the view or no surface (resolved to zero).
+    ok: bool,
+    x: vec3<f32>,
+    r: f32,
+    n: vec3<f32>,
+    // The linear index of the centre cell of its neighbourhood (INVALID: none).
+    key: u32,
+}
+
+fn pixel_input(gid: vec2<u32>) -> PixelInput {
+    var q: PixelInput;
+    q.p = vec2<i32>(gid);
+    q.key = INVALID;
+    let size = params.view.xy;
+    if f32(q.p.x) >= size.x || f32(q.p.y) >= size.y {
+        return q;
+    }
+    let x = pixel_point(q.p, size);
+    let n = gbuffer_decode_normal(textureLoad(gbuffer, q.p, 0));
+    if x.w == 0.0 || n.w == 0.0 {
+        return q;
+    }
+    q.ok = true;
+    q.x = x.xyz;
+    q.n = n.xyz;
+    q.r = pixel_radius(q.x, q.n);
+    let c = gather_centre(q.x);
+    if c.w != 0u {
+        let dx = atomicLoad(&header[H_DIMS]);
+        let dy = atomicLoad(&header[H_DIMS + 1u]);
+        q.key = (c.z * dy + c.y) * dx + c.x;
+    }
+    return q;
+}
+
+fn in_view(p: vec2<i32>) -> bool {
+    return f32(p.x) < params.view.x && f32(p.y) < params.view.y;
+}
+
+// The cooperative gather of one tile whose pixels share the centre cell `key`.
+fn gather_shared(q: PixelInput, key: u32, lid: u32) -> GatherResult {
+    var g: GatherResult;
+    let dx = atomicLoad(&header[H_DIMS]);
+    let dy = atomicLoad(&header[H_DIMS + 1u]);
+    let c = vec3(key % dx, (key / dx) % dy, key / (dx * dy));
+    let r2 = q.r * q.r;
+    for (var k = 0u; k < 9u; k += 1u) {
+        if lid == 0u {
+            let first = gather_row(c, k);
+            tile_range = vec2(cells[first], cells[first + 3u]);
+        }
+        let range = workgroupUniformLoad(&tile_range);
+        for (var base = range.x; base < range.y; base += TILE_PHOTONS) {
+            let n = min(TILE_PHOTONS, range.y - base);
+            for (var j = lid; j < n; j += 64u) {
+                tile_photons[j] = sorted[base + j];
+            }
+            workgroupBarrier();
+            if q.ok {
+                g.visited += n;
+                for (var i = 0u; i < n; i += 1u) {
+                    gather_photon(tile_photons[i], q.x, q.n, r2, &g);
+                }
+            }
+            workgroupBarrier();
+        }
+    }
+    return g;
+}
+
+@compute @workgroup_size(8, 8)
+fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let size = params.view.xy;
+    let p = vec2<i32>(gid.xy);
+    let idx = u32(p.y) * u32(size.x) + u32(p.x);
+    if idx == 0u {
+        atomicStore(&header[C_FRAME], u32(params.gather.y));
+    }
+    if (params.frame.w & FLAG_FROZEN) != 0u {
+        if in_view(p) {
+            textureStore(out_caustics, p, vec4(accum[idx].xyz, 1.0));
+        }
+        return;
+    }
+    let q = pixel_input(gid.xy);
+    if (params.frame.w & FLAG_SHARED) != 0u {
+        // Uniform control flow: every invocation reaches the barriers.
+        if lid == 0u {
+            atomicStore(&tile_min, INVALID);
+            atomicStore(&tile_max, 0u);
+        }
+        workgroupBarrier();
+        if q.ok {
+            atomicMin(&tile_min, q.key);
+            atomicMax(&tile_max, q.key);
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            let lo = atomicLoad(&tile_min);
+            let hi = atomicLoad(&tile_max);
+            // One centre cell for the whole tile (and at least one pixel with a surface).
+            tile_key = select(INVALID, lo, lo == hi);
+            if lo == hi && lo != INVALID {
+                atomicAdd(&header[C_SHARED_TILES], 1u);
+            } else if lo != INVALID {
+                atomicAdd(&header[C_FALLBACK_TILES], 1u);
+            }
+        }
+        let key = workgroupUniformLoad(&tile_key);
+        if key != INVALID {
+            let g = gather_shared(q, key, lid);
+            if q.ok {
+                count_gather(g);
+                resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz));
+            } else if in_view(q.p) {
+                resolve_pixel(q.p, vec3(0.0), 0.0);
+            }
+            return;
+        }
+    }
+    if !in_view(q.p) {
+        return;
+    }
+    if !q.ok {
+        resolve_pixel(q.p, vec3(0.0), 0.0);
+        return;
+    }
+    let g = gather_at(q.x, q.n, q.r);
+    count_gather(g);
+    resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz));
+}
+
+// One thread after the gather in the same pass: its read-write binding of the header makes
+// the pass wait for the gather before the pass's end timestamp (on lavapipe a pass whose last
+// dispatch nothing waits for reports almost no time).
+@compute @workgroup_size(1)
+fn pm_fence() {
+    atomicAdd(&header[C_FRAME], 0u);
+}

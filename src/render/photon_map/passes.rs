@@ -1,0 +1,178 @@
+//! The photon-map passes of one view, in `Core3d` after the deferred lighting (the gather
+//! reads the view's depth and G-buffer) and before the composite: trace, grid build, gather.
+//! Each records a GPU span and its name in the dispatch log. A frozen progressive mean (after
+//! `max_frames`) runs only the gather pass, which then copies the mean.
+
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::prelude::*;
+use bevy::render::diagnostic::RecordDiagnostics;
+use bevy::render::render_resource::{
+    BindGroup, BindGroupEntries, ComputePassDescriptor, ComputePipeline, PipelineCache,
+};
+use bevy::render::renderer::{RenderContext, ViewQuery};
+
+use super::pipelines::{GRID_ENTRIES, PhotonMapPipelines, grid_dispatches, photon_groups};
+use super::view::{PhotonMapFrame, PhotonMapViewState};
+use crate::render::trace::scene::TraceSceneBuffers;
+use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
+
+/// Emit and trace; photons stored at their first diffuse hit after a specular one (with the
+/// grid's bounds reduction, its first stage).
+pub const TRACE_PASS: &str = "caustics/photon_map/trace";
+/// Bounds, layout, count, prefix sum and scatter.
+pub const GRID_PASS: &str = "caustics/photon_map/grid";
+/// Per-pixel gather into the progressive mean and the caustics buffer.
+pub const GATHER_PASS: &str = "caustics/photon_map/gather";
+/// Every pass, in order.
+pub const ALL_PASSES: [&str; 3] = [TRACE_PASS, GRID_PASS, GATHER_PASS];
+
+/// Counters read into diagnostics (`render/caustics/photon_map/<name>`), by header word
+/// (`C_*` in photon.wgsl).
+pub const PHOTON_MAP_COUNTERS: [(&str, u64); 8] = [
+    ("caustics/photon_map/emitted", 0),
+    ("caustics/photon_map/stored", 1),
+    ("caustics/photon_map/overflow", 4),
+    ("caustics/photon_map/nan_guards", 7),
+    ("caustics/photon_map/grid_cells", 8),
+    ("caustics/photon_map/coarsened", 9),
+    ("caustics/photon_map/gathered", 12),
+    ("caustics/photon_map/gathered_max", 13),
+];
+
+fn compute_pass(
+    ctx: &mut RenderContext,
+    name: &'static str,
+    stages: &[(&ComputePipeline, &BindGroup, [u32; 3])],
+) {
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let encoder = ctx.command_encoder();
+    let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+        label: Some(name),
+        timestamp_writes: None,
+    });
+    let span = diagnostics.pass_span(&mut pass, name);
+    for (pipeline, group, groups) in stages {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, *group, &[]);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+    span.end(&mut pass);
+}
+
+/// The system.
+#[allow(clippy::type_complexity)]
+pub fn photon_map_passes(
+    view: ViewQuery<(
+        &ViewCausticsBuffer,
+        &ViewPrepassTextures,
+        &PhotonMapViewState,
+        &PhotonMapFrame,
+    )>,
+    scene: Option<Res<TraceSceneBuffers>>,
+    pipelines: Res<PhotonMapPipelines>,
+    cache: Res<PipelineCache>,
+    log: Res<CausticsDispatchLog>,
+    mut ctx: RenderContext,
+) {
+    let (buffer, prepass, state, _) = view.into_inner();
+    let Some(scene) = scene else {
+        return;
+    };
+    let (Some(depth), Some(gbuffer)) = (prepass.depth_view(), prepass.deferred_view()) else {
+        return;
+    };
+    let (Some(trace), Some(gather), Some(fence)) = (
+        cache.get_compute_pipeline(pipelines.trace),
+        cache.get_compute_pipeline(pipelines.gather),
+        cache.get_compute_pipeline(pipelines.fence),
+    ) else {
+        return;
+    };
+    let Some(grid) = pipelines
+        .grid
+        .iter()
+        .map(|id| cache.get_compute_pipeline(*id))
+        .collect::<Option<Vec<_>>>()
+    else {
+        return;
+    };
+    let b = &scene.buffers;
+    let group = ctx.render_device().create_bind_group(
+        "caustics:bind_group:photon_map",
+        &cache.get_bind_group_layout(&pipelines.layout),
+        &BindGroupEntries::with_indices((
+            (0, b[0].as_entire_binding()),
+            (1, b[1].as_entire_binding()),
+            (2, b[2].as_entire_binding()),
+            (3, b[3].as_entire_binding()),
+            (4, b[4].as_entire_binding()),
+            (5, b[5].as_entire_binding()),
+            (6, b[6].as_entire_binding()),
+            (8, b[7].as_entire_binding()),
+            (9, state.params.as_entire_binding()),
+            (10, state.photons.as_entire_binding()),
+            (11, state.header.as_entire_binding()),
+            (12, state.sorted.as_entire_binding()),
+            (13, state.cells.as_entire_binding()),
+            (14, state.accum.as_entire_binding()),
+            (15, depth),
+            (16, gbuffer),
+            (17, &buffer.view),
+        )),
+    );
+    if state.traces {
+        let grid_group = ctx.render_device().create_bind_group(
+            "caustics:bind_group:photon_map_grid",
+            &cache.get_bind_group_layout(&pipelines.grid_layout),
+            &BindGroupEntries::sequential((
+                state.grid_params.as_entire_binding(),
+                state.photons.as_entire_binding(),
+                state.sorted.as_entire_binding(),
+                state.header.as_entire_binding(),
+                state.cells.as_entire_binding(),
+                state.blocks.as_entire_binding(),
+                state.photon_cell.as_entire_binding(),
+            )),
+        );
+        let encoder = ctx.command_encoder();
+        encoder.clear_buffer(&state.header, 0, None);
+        let photons = state.per_light * state.lights;
+        let sizes = grid_dispatches(state.key.capacity, state.key.budget + 1);
+        let mut stages: Vec<_> = grid
+            .iter()
+            .zip(sizes)
+            .map(|(p, n)| (*p, &grid_group, n))
+            .collect();
+        debug_assert_eq!(stages.len(), GRID_ENTRIES.len());
+        // The bounds reduction reads the photons, so the trace's span ends after a barrier
+        // that waits for it: on lavapipe a pass whose last dispatch nothing waits for inside
+        // it reports almost no time (its work lands between two spans).
+        let bounds = stages.remove(0);
+        compute_pass(
+            &mut ctx,
+            TRACE_PASS,
+            &[(trace, &group, photon_groups(photons)), bounds],
+        );
+        log.record(TRACE_PASS);
+        ctx.command_encoder().clear_buffer(&state.cells, 0, None);
+        compute_pass(&mut ctx, GRID_PASS, &stages);
+        log.record(GRID_PASS);
+    }
+    let size = state.key.size;
+    compute_pass(
+        &mut ctx,
+        GATHER_PASS,
+        &[
+            (gather, &group, [size.x.div_ceil(8), size.y.div_ceil(8), 1]),
+            (fence, &group, [1, 1, 1]),
+        ],
+    );
+    log.record(GATHER_PASS);
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    for (name, word) in PHOTON_MAP_COUNTERS {
+        let at = word * 4;
+        diagnostics.record_u32(ctx.command_encoder(), &state.header.slice(at..at + 4), name);
+    }
+}

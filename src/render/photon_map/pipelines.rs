@@ -1,0 +1,170 @@
+//! The photon map's pipelines: the tracer module (the shared tracer's WGSL, photon.wgsl,
+//! trace.wgsl, the G-buffer decoder and gather.wgsl: entry points `pm_trace` and
+//! `pm_gather`) and the grid module (photon.wgsl + grid.wgsl), created in `RenderStartup`.
+
+use bevy::prelude::*;
+use bevy::render::render_resource::{
+    BindGroupLayoutDescriptor, BindGroupLayoutEntries, CachedComputePipelineId,
+    ComputePipelineDescriptor, PipelineCache, ShaderStages, StorageTextureAccess,
+    TextureSampleType, binding_types,
+};
+use bevy::shader::Shader;
+
+use crate::optics::SCAN_BLOCK;
+use crate::render::CAUSTICS_BUFFER_FORMAT;
+
+/// The WGSL of the tracer module (trace and gather).
+pub fn compute_source() -> String {
+    [
+        crate::render::trace::tracer_source().as_str(),
+        include_str!("photon.wgsl"),
+        include_str!("trace.wgsl"),
+        include_str!("../gbuffer.wgsl"),
+        include_str!("gather.wgsl"),
+    ]
+    .join("\n")
+}
+
+/// The WGSL of the grid-build module.
+pub fn grid_source() -> String {
+    [include_str!("photon.wgsl"), include_str!("grid.wgsl")].join("\n")
+}
+
+/// The grid build's entry points, in the order they run (the last one only makes the pass
+/// wait for the scatter, so its GPU span holds it).
+pub const GRID_ENTRIES: [&str; 8] = [
+    "grid_bounds",
+    "grid_setup",
+    "grid_count",
+    "grid_scan_blocks",
+    "grid_scan_top",
+    "grid_scan_add",
+    "grid_scatter",
+    "grid_fence",
+];
+
+/// Workgroups of 64 for `n` threads as a 2D grid (at most 65 535 along x).
+pub fn photon_groups(n: u32) -> [u32; 3] {
+    let groups = n.div_ceil(64).max(1);
+    let x = groups.min(65_535);
+    [x, groups.div_ceil(x), 1]
+}
+
+/// The workgroups of each [`GRID_ENTRIES`] dispatch for a photon buffer of `capacity` and a
+/// cell array of `cell_words` words (the budget + 1). Shared by the plugin and the exactness
+/// test, so both run the same build.
+pub fn grid_dispatches(capacity: u32, cell_words: u32) -> [[u32; 3]; 8] {
+    let photons = photon_groups(capacity);
+    let blocks = cell_words.div_ceil(SCAN_BLOCK).max(1);
+    [
+        photons,
+        [1, 1, 1],
+        photons,
+        [blocks, 1, 1],
+        [1, 1, 1],
+        [blocks, 1, 1],
+        photons,
+        [1, 1, 1],
+    ]
+}
+
+/// Shader handles, added to `Assets<Shader>` by the plugin.
+#[derive(Resource, Clone)]
+pub struct PhotonMapShaders {
+    /// Trace and gather.
+    pub compute: Handle<Shader>,
+    /// Grid build.
+    pub grid: Handle<Shader>,
+}
+
+/// Layouts and pipeline ids.
+#[derive(Resource)]
+pub struct PhotonMapPipelines {
+    /// Group 0 of `pm_trace` and `pm_gather`.
+    pub layout: BindGroupLayoutDescriptor,
+    /// Group 0 of the grid build.
+    pub grid_layout: BindGroupLayoutDescriptor,
+    /// `pm_trace`.
+    pub trace: CachedComputePipelineId,
+    /// `pm_gather`.
+    pub gather: CachedComputePipelineId,
+    /// `pm_fence`: the gather pass's last dispatch (see gather.wgsl).
+    pub fence: CachedComputePipelineId,
+    /// The grid build, in [`GRID_ENTRIES`] order.
+    pub grid: [CachedComputePipelineId; 8],
+}
+
+pub(super) fn init_photon_map_pipelines(
+    mut commands: Commands,
+    shaders: Res<PhotonMapShaders>,
+    cache: Res<PipelineCache>,
+) {
+    use binding_types::*;
+    let ro = || storage_buffer_read_only_sized(false, None);
+    let rw = || storage_buffer_sized(false, None);
+    let layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:photon_map",
+        &BindGroupLayoutEntries::with_indices(
+            ShaderStages::COMPUTE,
+            (
+                (0, ro()),
+                (1, ro()),
+                (2, ro()),
+                (3, ro()),
+                (4, ro()),
+                (5, ro()),
+                (6, ro()),
+                (8, ro()),
+                (9, uniform_buffer_sized(false, None)),
+                (10, rw()),
+                (11, rw()),
+                (12, ro()),
+                (13, ro()),
+                (14, rw()),
+                (15, texture_depth_2d()),
+                (16, texture_2d(TextureSampleType::Uint)),
+                (
+                    17,
+                    texture_storage_2d(CAUSTICS_BUFFER_FORMAT, StorageTextureAccess::WriteOnly),
+                ),
+            ),
+        ),
+    );
+    let grid_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:photon_map_grid",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer_sized(false, None),
+                ro(),
+                rw(),
+                rw(),
+                rw(),
+                rw(),
+                rw(),
+            ),
+        ),
+    );
+    let queue =
+        |entry: &'static str, layout: &BindGroupLayoutDescriptor, shader: &Handle<Shader>| {
+            cache.queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(format!("caustics:pipeline:photon_map_{entry}").into()),
+                layout: vec![layout.clone()],
+                shader: shader.clone(),
+                entry_point: Some(entry.into()),
+                ..default()
+            })
+        };
+    let trace = queue("pm_trace", &layout, &shaders.compute);
+    let gather = queue("pm_gather", &layout, &shaders.compute);
+    let fence = queue("pm_fence", &layout, &shaders.compute);
+    let grid = GRID_ENTRIES.map(|e| queue(e, &grid_layout, &shaders.grid));
+    commands.insert_resource(PhotonMapPipelines {
+        layout,
+        grid_layout,
+        trace,
+        gather,
+        fence,
+        grid,
+    });
+}

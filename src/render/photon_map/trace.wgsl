@@ -1,0 +1,127 @@
+// The photon map's trace (seed 001 section 3.1 with the shared tracer of src/render/trace/):
+// one thread per photon; photon k of light l starts at R2 point k of the light's parameter
+// square (rotated every frame), carries power · weight / N, goes through any number of
+// specular events up to the bounce limit (conductors: Schlick Fresnel; dielectrics: reflect
+// or refract with the exact Fresnel probability, flux unchanged, TIR always reflects;
+// Beer-Lambert inside media) and is stored at its first diffuse hit after at least one
+// specular event. Photons whose first hit is diffuse are direct light (not a caustic) and are
+// dropped, as in the reference tracer. Concatenated after the tracer's WGSL and photon.wgsl.
+
+struct PmParams {
+    world_from_clip: mat4x4<f32>,
+    clip_from_world: mat4x4<f32>,
+    // The other eye's clip_from_world (stereo reuse; the right eye reads the left's buffer).
+    other_clip_from_world: mat4x4<f32>,
+    eye: vec4<f32>,      // xyz camera position, w scene scale (ray offsets)
+    view: vec4<f32>,     // width, height (px), r² of this frame (m²), normal threshold
+    emit: vec4<u32>,     // photons per light, lights, max bounces, capacity
+    frame: vec4<u32>,    // R2 rotation x, y, frame seed, flags (FLAG_*)
+    gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, 0, 0
+    lens: vec4<f32>,     // focal lengths fx, fy (px); z 1 for a perspective camera (footprint floor)
+    forward: vec4<f32>,  // the camera's forward axis (xyz)
+}
+
+const FLAG_ACCUMULATE: u32 = 1u; // blend into the running mean (else replace it)
+const FLAG_FROZEN: u32 = 2u;     // gather nothing: write the mean as it is
+const FLAG_SHARED: u32 = 4u;     // workgroup-shared cooperative gather (algorithm 1)
+const FLAG_MIRRORS: u32 = 8u;    // pixels on mirrors gather at their reflected point
+const FLAG_REUSE: u32 = 16u;     // this view is a right eye: reuse the left eye's gathers
+
+@group(0) @binding(9) var<uniform> params: PmParams;
+@group(0) @binding(10) var<storage, read_write> photons: array<Photon>;
+@group(0) @binding(11) var<storage, read_write> header: array<atomic<u32>>;
+
+fn store_photon(pos: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, n: vec3<f32>) {
+    let slot = atomicAdd(&header[H_COUNT], 1u);
+    if slot >= params.emit.w {
+        atomicAdd(&header[C_OVERFLOW], 1u);
+        return;
+    }
+    photons[slot] = Photon(pos, oct_encode(d), flux, oct_encode(n));
+}
+
+@compute @workgroup_size(64)
+fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = flat_index(gid, groups, 64u);
+    let per_light = params.emit.x;
+    if per_light == 0u || i >= per_light * params.emit.y {
+        return;
+    }
+    let light = lights[i / per_light];
+    let k = i % per_light;
+    let e = light_emit(light, optics_r2_point(k, params.frame.xy));
+    var flux = light.power.xyz * (e.weight / f32(per_light));
+    if !finite3(flux) || all(flux <= vec3(0.0)) {
+        return;
+    }
+    atomicAdd(&header[C_EMITTED], 1u);
+    let scale = params.eye.w;
+    let key = i * 0x9e3779b9u + params.frame.z;
+    var o = e.o;
+    var d = e.d;
+    var medium = INVALID;
+    var bounces = 0u;
+    // max_bounces <= 128 specular events (PhotonMapSettings::sanitized), then the diffuse one.
+    for (var guard = 0u; guard < 130u; guard += 1u) {
+        let hit = bvh_closest_hit(o, d, 0.0, BVH_FAR);
+        if hit.instance == BVH_INVALID {
+            if bounces == 0u {
+                atomicAdd(&header[C_MISSED], 1u);
+            }
+            return;
+        }
+        if medium != INVALID {
+            let mm = materials[3u * medium];
+            flux *= optics_beer_lambert(materials[3u * medium + 1u].xyz, mm.w, hit.t);
+        }
+        let s = surface_hit(hit, o, d);
+        if !s.ok || !finite3(flux) {
+            atomicAdd(&header[C_NAN], 1u);
+            return;
+        }
+        if s.kind == MAT_DIFFUSE {
+            if bounces == 0u {
+                atomicAdd(&header[C_DIRECT], 1u);
+            } else {
+                store_photon(s.pos, d, flux, s.ng_f);
+            }
+            return;
+        }
+        if bounces >= params.emit.z {
+            atomicAdd(&header[C_MAX_DEPTH], 1u);
+            return;
+        }
+        bounces += 1u;
+        if s.kind == MAT_CONDUCTOR {
+            flux *= optics_fresnel_schlick(-dot(d, s.ns_f), materials[3u * hit.instance + 2u].xyz);
+            d = reflect_guarded(d, s.ns_f, s.ng_f);
+            o = optics_offset_ray_origin(s.pos, s.ng_f, scale);
+            continue;
+        }
+        // Dielectric: reflect with the Fresnel probability (unbiased, flux unchanged).
+        let m0 = materials[3u * hit.instance];
+        let thin = m0.z > 0.5;
+        let eta = select(max(m0.y, 1.0), 1.0 / max(m0.y, 1.0), s.entering);
+        let r = optics_fresnel_dielectric(-dot(d, s.ns_f), eta);
+        var t = vec4(d, 1.0);
+        if !thin {
+            t = refract_guarded(d, s.ns_f, s.ng_f, eta);
+        }
+        var refract = false;
+        if r >= 1.0 || t.w == 0.0 {
+            atomicAdd(&header[C_TIR], 1u);
+        } else {
+            refract = optics_hash_unit(key, bounces) >= r;
+        }
+        if refract {
+            d = t.xyz;
+            if !thin {
+                medium = select(INVALID, hit.instance, s.entering);
+            }
+            o = optics_offset_ray_origin(s.pos, -s.ng_f, scale);
+        } else {
+            d = reflect_guarded(d, s.ns_f, s.ng_f);
+            o = optics_offset_ray_origin(s.pos, s.ng_f, scale);
+        }
+    }
+}

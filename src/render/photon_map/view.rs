@@ -1,0 +1,330 @@
+//! Per-view state of the photon map: its buffers, the progressive frame count and what resets
+//! it, and the uniforms of each frame.
+
+use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
+use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferUsages};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::view::ExtractedView;
+
+use crate::optics::{PHOTON_BYTES, SCAN_BLOCK, pcg_hash, progressive_radius2};
+use crate::render::ExtractedCaustics;
+use crate::render::trace::scene::TraceSceneBuffers;
+use crate::{CausticsTechnique, PhotonMapSettings};
+
+/// Words of the header buffer: counters (0..32, read back) and the grid's layout (32..64).
+pub const HEADER_WORDS: u64 = 64;
+/// Header word: photons stored by the trace (`H_COUNT` in photon.wgsl).
+pub const H_COUNT: usize = 1;
+/// Header words of the grid's layout (`H_*` in photon.wgsl): X, Y, Z.
+pub const H_DIMS: usize = 40;
+/// Header word: cell doublings.
+pub const H_SHIFT: usize = 44;
+/// Header words: the origin, f32 bits.
+pub const H_ORIGIN: usize = 45;
+/// Header word: the cell size, f32 bits.
+pub const H_CELL: usize = 48;
+/// Header word: 1 / cell size, f32 bits.
+pub const H_INV: usize = 49;
+/// Bytes of the per-view uniforms (`PmParams` in trace.wgsl).
+pub const PARAMS_BYTES: u64 = 3 * 64 + 7 * 16;
+
+const FLAG_ACCUMULATE: u32 = 1;
+const FLAG_FROZEN: u32 = 2;
+const FLAG_SHARED: u32 = 4;
+
+/// What decides the buffers' sizes; a change reallocates them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PhotonMapKey {
+    /// View size, pixels.
+    pub size: UVec2,
+    /// Photons the buffers hold (photons per light × lights).
+    pub capacity: u32,
+    /// Grid budget, cells.
+    pub budget: u32,
+}
+
+/// What the progressive mean is of: any change starts it again.
+#[derive(Clone, Debug, PartialEq)]
+struct Accumulating {
+    generation: u64,
+    clip_from_world: [u32; 16],
+    settings: PhotonMapSettings,
+    per_light: u32,
+    radius: u32,
+}
+
+/// The photon map of one view (render world).
+#[derive(Component)]
+pub struct PhotonMapViewState {
+    /// Sizes.
+    pub key: PhotonMapKey,
+    /// The settings in use (sanitized).
+    pub settings: PhotonMapSettings,
+    /// `PmParams`.
+    pub params: Buffer,
+    /// `GridParams` of grid.wgsl.
+    pub grid_params: Buffer,
+    /// Photons as traced.
+    pub photons: Buffer,
+    /// Photons sorted by cell.
+    pub sorted: Buffer,
+    /// Counters and the grid's layout ([`HEADER_WORDS`]).
+    pub header: Buffer,
+    /// `startIdx`: budget + 1 words.
+    pub cells: Buffer,
+    /// The scan's block sums.
+    pub blocks: Buffer,
+    /// Each photon's cell, from the count pass.
+    pub photon_cell: Buffer,
+    /// Per pixel: the running mean (rgb) and the eye distance (w).
+    pub accum: Buffer,
+    /// Photons per light this frame.
+    pub per_light: u32,
+    /// Lights in the table.
+    pub lights: u32,
+    /// The progressive frame shown (1-based; 0 before the first).
+    pub frame: u32,
+    /// Frames traced since the state was created (the sampling seed).
+    pub serial: u32,
+    /// This frame's gather radius, metres.
+    pub radius: f32,
+    /// Whether this frame traces and builds (false when the mean is frozen).
+    pub traces: bool,
+    accumulating: Option<Accumulating>,
+}
+
+/// Marks a view whose photon-map passes run this frame.
+#[derive(Component)]
+pub struct PhotonMapFrame;
+
+impl PhotonMapViewState {
+    fn new(device: &RenderDevice, key: PhotonMapKey, settings: PhotonMapSettings) -> Self {
+        let buffer = |label: &'static str, size: u64, usage: BufferUsages| {
+            device.create_buffer(&BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let storage = BufferUsages::STORAGE;
+        let cleared = BufferUsages::STORAGE | BufferUsages::COPY_DST | BufferUsages::COPY_SRC;
+        let uniform = BufferUsages::UNIFORM | BufferUsages::COPY_DST;
+        let cap = u64::from(key.capacity.max(1));
+        let cell_words = u64::from(key.budget) + 1;
+        let pixels = u64::from(key.size.x) * u64::from(key.size.y);
+        Self {
+            key,
+            settings,
+            params: buffer("caustics:photon_map:params", PARAMS_BYTES, uniform),
+            grid_params: buffer("caustics:photon_map:grid_params", 16, uniform),
+            photons: buffer("caustics:photon_map:photons", cap * PHOTON_BYTES, storage),
+            sorted: buffer("caustics:photon_map:sorted", cap * PHOTON_BYTES, storage),
+            header: buffer("caustics:photon_map:header", HEADER_WORDS * 4, cleared),
+            cells: buffer("caustics:photon_map:cells", cell_words * 4, cleared),
+            blocks: buffer(
+                "caustics:photon_map:blocks",
+                cell_words.div_ceil(u64::from(SCAN_BLOCK)) * 4,
+                storage,
+            ),
+            photon_cell: buffer("caustics:photon_map:photon_cell", cap * 4, storage),
+            accum: buffer("caustics:photon_map:accum", pixels * 16, storage),
+            per_light: 0,
+            lights: 0,
+            frame: 0,
+            serial: 0,
+            radius: 0.0,
+            traces: false,
+            accumulating: None,
+        }
+    }
+
+    /// GPU bytes this view's photon map holds.
+    pub fn bytes(&self) -> u64 {
+        [
+            &self.params,
+            &self.grid_params,
+            &self.photons,
+            &self.sorted,
+            &self.header,
+            &self.cells,
+            &self.blocks,
+            &self.photon_cell,
+            &self.accum,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
+    }
+}
+
+/// The first frame's gather radius (and the grid's cell size) for `settings` in a scene whose
+/// casters' bounding sphere has radius `caster_radius`; at least 1e-6 m.
+pub fn base_radius(settings: &PhotonMapSettings, caster_radius: f32) -> f32 {
+    let r = settings.radius * caster_radius;
+    if r.is_finite() { r.max(1e-6) } else { 1e-6 }
+}
+
+/// Create, resize or reset each photon-map view's state and write its uniforms; mark the
+/// views whose passes run this frame.
+#[allow(clippy::type_complexity)]
+pub fn prepare_photon_map_views(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    scene: Option<Res<TraceSceneBuffers>>,
+    limits: Option<Res<crate::limits::CausticsLimits>>,
+    mut views: Query<(
+        Entity,
+        &ExtractedCaustics,
+        &ExtractedCamera,
+        &ExtractedView,
+        Option<&mut PhotonMapViewState>,
+    )>,
+) {
+    let limits = limits.map(|l| l.clone()).unwrap_or_default();
+    for (entity, caustics, camera, view, state) in &mut views {
+        let mut e = commands.entity(entity);
+        let size = camera.physical_viewport_size.unwrap_or_default();
+        let mine = caustics.technique == CausticsTechnique::PhotonMap;
+        let per_light = caustics
+            .photons_per_light
+            .min(limits.max_photons(CausticsTechnique::PhotonMap)) as u32;
+        let active = mine
+            && per_light > 0
+            && size.x > 0
+            && size.y > 0
+            && scene.as_ref().is_some_and(|s| s.lights > 0);
+        if !active {
+            e.remove::<PhotonMapFrame>();
+            if state.is_some() && !mine {
+                e.remove::<PhotonMapViewState>();
+            }
+            continue;
+        }
+        let scene = scene.as_ref().unwrap();
+        let settings = caustics.photon_map.sanitized();
+        let max_total = (limits.max_binding_bytes / PHOTON_BYTES).min(u64::from(u32::MAX));
+        let capacity = (u64::from(per_light) * u64::from(scene.lights)).min(max_total) as u32;
+        let key = PhotonMapKey {
+            size,
+            capacity,
+            budget: settings.max_grid_cells,
+        };
+        let mut fresh = None;
+        let state = match state {
+            Some(s) if s.key == key => s.into_inner(),
+            _ => {
+                fresh = Some(PhotonMapViewState::new(&device, key, settings.clone()));
+                fresh.as_mut().unwrap()
+            }
+        };
+        state.settings = settings.clone();
+        state.per_light = per_light;
+        state.lights = scene.lights;
+        let clip_from_world = crate::render::clip_from_world(view);
+        let r0 = base_radius(&settings, scene.casters.1);
+        let now = Accumulating {
+            generation: scene.generation,
+            clip_from_world: clip_from_world.to_cols_array().map(f32::to_bits),
+            settings: settings.clone(),
+            per_light,
+            radius: r0.to_bits(),
+        };
+        if state.accumulating.as_ref() != Some(&now) {
+            state.frame = 0;
+            state.accumulating = Some(now);
+        }
+        let frozen = settings.progressive && state.frame >= settings.max_frames;
+        if !frozen {
+            state.frame = if settings.progressive {
+                state.frame + 1
+            } else {
+                1
+            };
+            state.serial = state.serial.wrapping_add(1);
+        }
+        state.traces = !frozen;
+        let r2 = if settings.progressive {
+            progressive_radius2(r0 * r0, state.frame, settings.alpha)
+        } else {
+            r0 * r0
+        };
+        state.radius = r2.sqrt();
+        let flags = if frozen { FLAG_FROZEN } else { 0 }
+            | if state.frame > 1 { FLAG_ACCUMULATE } else { 0 }
+            | if settings.shared_memory { FLAG_SHARED } else { 0 };
+        write_uniforms(&queue, state, scene, view, clip_from_world, (r0, r2), flags);
+        if let Some(s) = fresh.take() {
+            e.insert(s);
+        }
+        e.insert(PhotonMapFrame);
+    }
+}
+
+fn write_uniforms(
+    queue: &RenderQueue,
+    state: &PhotonMapViewState,
+    scene: &TraceSceneBuffers,
+    view: &ExtractedView,
+    clip_from_world: Mat4,
+    (r0, r2): (f32, f32),
+    flags: u32,
+) {
+    let s = &state.settings;
+    let f32s = |b: &mut Vec<u8>, v: &[f32]| b.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+    let u32s = |b: &mut Vec<u8>, v: &[u32]| b.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+    let mut b = Vec::with_capacity(PARAMS_BYTES as usize);
+    f32s(&mut b, &clip_from_world.inverse().to_cols_array());
+    f32s(&mut b, &clip_from_world.to_cols_array());
+    f32s(&mut b, &clip_from_world.to_cols_array());
+    let eye = view.world_from_view.translation();
+    f32s(&mut b, &[eye.x, eye.y, eye.z, scene.scene_scale]);
+    let size = state.key.size.as_vec2();
+    f32s(&mut b, &[size.x, size.y, r2, s.normal_threshold]);
+    u32s(
+        &mut b,
+        &[
+            state.per_light,
+            state.lights,
+            s.max_bounces,
+            state.key.capacity,
+        ],
+    );
+    let serial = state.serial;
+    let rotation = [
+        pcg_hash(serial.wrapping_mul(2) ^ 0x5bd1_e995),
+        pcg_hash(serial.wrapping_mul(2) + 1),
+    ];
+    u32s(
+        &mut b,
+        &[
+            rotation[0],
+            rotation[1],
+            pcg_hash(serial ^ 0x2545_f491),
+            flags,
+        ],
+    );
+    let frame = state.frame.max(1);
+    f32s(&mut b, &[1.0 / frame as f32, frame as f32, 0.0, 0.0]);
+    let p = view.clip_from_view;
+    let perspective = p.w_axis.w == 0.0;
+    f32s(
+        &mut b,
+        &[
+            0.5 * size.x * p.x_axis.x,
+            0.5 * size.y * p.y_axis.y,
+            if perspective { 1.0 } else { 0.0 },
+            0.0,
+        ],
+    );
+    let forward = view.world_from_view.forward();
+    f32s(&mut b, &[forward.x, forward.y, forward.z, 0.0]);
+    debug_assert_eq!(b.len() as u64, PARAMS_BYTES);
+    queue.write_buffer(&state.params, 0, &b);
+    let mut g = Vec::with_capacity(16);
+    f32s(&mut g, &[r0, 1.0 / r0]);
+    u32s(&mut g, &[state.key.budget, state.key.capacity]);
+    queue.write_buffer(&state.grid_params, 0, &g);
+}
