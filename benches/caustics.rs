@@ -195,7 +195,11 @@ fn queries() -> Vec<glam::Vec3> {
     (0..QUERIES)
         .map(|i| {
             let (x, z) = ((i % side) as f32, (i / side) as f32);
-            glam::Vec3::new(x / side as f32 * 1.6 - 0.8, 0.0, z / side as f32 * 1.6 - 0.8)
+            glam::Vec3::new(
+                x / side as f32 * 1.6 - 0.8,
+                0.0,
+                z / side as f32 * 1.6 - 0.8,
+            )
         })
         .collect()
 }
@@ -244,7 +248,11 @@ fn bench_photon_map_table1(c: &mut Criterion) {
                     let grid = optics::build_grid(&pts, r, 1.0 / r, optics::MAX_GRID_CELLS);
                     let ph = stored(&grid, &pts);
                     qs.iter()
-                        .map(|q| optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0).irradiance.x)
+                        .map(|q| {
+                            optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0)
+                                .irradiance
+                                .x
+                        })
                         .sum::<f32>()
                 })
             });
@@ -295,7 +303,11 @@ fn bench_photon_map_table2(c: &mut Criterion) {
             g.bench_function(format!("{side}x{side}_r{r}/all_within_r"), |b| {
                 b.iter(|| {
                     qs.iter()
-                        .map(|q| optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0).irradiance.x)
+                        .map(|q| {
+                            optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0)
+                                .irradiance
+                                .x
+                        })
                         .sum::<f32>()
                 })
             });

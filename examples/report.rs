@@ -150,7 +150,12 @@ fn real_main() -> Result<(), String> {
                 CausticsTechnique::PhotonMap => PHOTON_MAP_LEVELS
                     .iter()
                     .map(|(name, photons)| {
-                        (name.to_string(), *photons, Default::default(), Default::default())
+                        (
+                            name.to_string(),
+                            *photons,
+                            Default::default(),
+                            Default::default(),
+                        )
                     })
                     .collect(),
                 _ => sweep

@@ -56,6 +56,11 @@ pub struct PhotonMapSettings {
     /// (table 4), and so did we on lavapipe (see the closing note of the issue and the
     /// bench). Cost: one workgroup-wide reduction per tile.
     pub shared_memory: bool,
+    /// Caustics seen in mirrors: a pixel showing a mirror (a conductor the camera ray hits
+    /// first) follows the reflected ray through the BVH (up to `max_bounces` mirrors) to the
+    /// diffuse point it shows, gathers there and shows `F · albedo / π · E`. Default true.
+    /// Cost: one BVH ray per pixel while the scene holds a mirror; nothing otherwise.
+    pub mirrors: bool,
 }
 
 impl Default for PhotonMapSettings {
@@ -69,6 +74,7 @@ impl Default for PhotonMapSettings {
             max_frames: 1024,
             normal_threshold: 0.7,
             shared_memory: false,
+            mirrors: true,
         }
     }
 }
@@ -88,6 +94,7 @@ impl PhotonMapSettings {
             max_frames: self.max_frames.clamp(1, 65_536),
             normal_threshold: f(self.normal_threshold, d.normal_threshold, -1.0, 1.0),
             shared_memory: self.shared_memory,
+            mirrors: self.mirrors,
         }
     }
 }

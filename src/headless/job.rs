@@ -80,6 +80,9 @@ pub struct RenderJob {
     pub image_space: crate::ImageSpaceSettings,
     /// Settings of the `photon_map` technique. Default: `PhotonMapSettings::default()`.
     pub photon_map: crate::PhotonMapSettings,
+    /// Technique `photon_map`: read the last frame's stored photons back into
+    /// [`RenderReport::photon_map_photons`] (tests). Default false.
+    pub read_photons: bool,
     /// Technique `volume`: the settings of the volumes fitted around the casters (one per
     /// light) when the scene declares none; its box and faces are ignored.
     pub volume: crate::CausticsVolume,
@@ -107,6 +110,7 @@ impl Default for RenderJob {
             aaps: Default::default(),
             image_space: Default::default(),
             photon_map: Default::default(),
+            read_photons: false,
             every_frame: false,
             volume: Default::default(),
         }
@@ -165,6 +169,13 @@ pub struct RenderReport {
     pub image_space: Option<ImageSpaceCounters>,
     /// Photon-map counters of the last frame (technique `photon_map` only).
     pub photon_map: Option<PhotonMapCounters>,
+    /// With `read_photons`: the last frame's stored photons (technique `photon_map`).
+    #[serde(skip)]
+    pub photon_map_photons: Vec<crate::optics::StoredPhoton>,
+    /// The caustics buffer's alpha per pixel of the last frame (the photon map marks pixels
+    /// showing a mirror with -1).
+    #[serde(skip)]
+    pub caustics_alpha: Vec<f32>,
     /// Counters of the first visible volume (technique `volume` only).
     pub volume: Option<super::volume::VolumeCounters>,
     /// The caustics passes dispatched in each measured frame.
@@ -405,6 +416,23 @@ impl PhotonMapCounters {
             accumulated_frames: c(24),
         }
     }
+}
+
+/// The first `n` 32-byte photon records (`Photon` in src/render/photon_map/photon.wgsl).
+fn decode_photons(bytes: &[u8], n: usize) -> Vec<crate::optics::StoredPhoton> {
+    bytes
+        .chunks_exact(crate::optics::PHOTON_BYTES as usize)
+        .take(n)
+        .map(|r| {
+            let w = |i: usize| u32::from_le_bytes(r[4 * i..4 * i + 4].try_into().unwrap());
+            let f = |i: usize| f32::from_bits(w(i));
+            crate::optics::StoredPhoton {
+                position: Vec3::new(f(0), f(1), f(2)),
+                flux: Vec3::new(f(4), f(5), f(6)),
+                normal: crate::optics::oct_decode(w(7)),
+            }
+        })
+        .collect()
 }
 
 /// This frame's GPU and CPU time of every caustics pass that recorded one, appended to
@@ -705,6 +733,9 @@ fn drive(
                 if job.0.every_frame {
                     readback.request();
                 }
+                if job.0.read_photons {
+                    readback.read_photons();
+                }
                 *phase = Phase::Measuring(0);
                 return;
             }
@@ -951,6 +982,8 @@ fn finish_report(
         let c = PhotonMapCounters::from_words(&snap.counters);
         o.report.photons_traced = c.photons_emitted;
         o.report.photons_in_view = c.photons_stored;
+        o.report.photon_map_photons = decode_photons(&snap.photons, c.photons_stored as usize);
+        o.report.caustics_alpha = snap.alpha.clone();
         o.report.photon_map = Some(c);
         o.report.caustics = Some(snap.image);
     } else if let Some(snap) = o.snapshot.take() {

@@ -101,9 +101,7 @@ impl LiveKind {
     /// Unit of the legend.
     pub fn unit(self) -> &'static str {
         match self {
-            Self::Caustics | Self::PhotonMap | Self::SvgfHistory | Self::PhotonMapGathered => {
-                "lx"
-            }
+            Self::Caustics | Self::PhotonMap | Self::SvgfHistory | Self::PhotonMapGathered => "lx",
             Self::Density | Self::GridOccupancy => "photons",
             Self::Area => "px",
             Self::Variance | Self::SlabGBuffer | Self::RsmLayer => "",

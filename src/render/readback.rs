@@ -35,6 +35,8 @@ struct State {
     requested: u32,
     /// Copies in flight, oldest first (one per requested frame).
     pending: std::collections::VecDeque<(Buffer, UVec2, u32, Arc<AtomicBool>)>,
+    /// Also copy the photon map's stored photons (tests).
+    photons: bool,
 }
 
 /// A readback result.
@@ -48,6 +50,13 @@ pub struct CausticsSnapshot {
     /// guard region past it (zeros unless something wrote past the capacity). Zeros for other
     /// techniques.
     pub splat_guard: [u32; GUARD_WORDS],
+    /// The caustics buffer's alpha per pixel (the photon map marks pixels showing a mirror
+    /// with -1).
+    pub alpha: Vec<f32>,
+    /// With [`CausticsReadback::read_photons`]: the photon map's photon buffer as traced
+    /// (32-byte records, `optics::PHOTON_BYTES`; the first `min(counters[1], capacity)` hold
+    /// this frame's photons). Empty otherwise.
+    pub photons: Vec<u8>,
 }
 
 /// Shared between the main and render worlds.
@@ -60,6 +69,13 @@ impl CausticsReadback {
     pub fn request(&self) {
         if let Ok(mut s) = self.0.lock() {
             s.requested = s.requested.saturating_add(1);
+        }
+    }
+
+    /// Copy the photon map's photons with every readback from now on (tests).
+    pub fn read_photons(&self) {
+        if let Ok(mut s) = self.0.lock() {
+            s.photons = true;
         }
     }
 
@@ -83,12 +99,18 @@ impl CausticsReadback {
         buffer.unmap();
         let f = |i: usize| f32::from_le_bytes(data[i..i + 4].try_into().unwrap());
         let mut image = CausticImage::new(w as u32, h as u32);
+        let mut alpha = vec![0.0; w * h];
         for y in 0..h {
             for x in 0..w {
                 let at = y * row + x * 16;
                 image.data[y * w + x] = Vec3::new(f(at), f(at + 4), f(at + 8));
+                alpha[y * w + x] = f(at + 12);
             }
         }
+        let photons = data
+            .get(row * h + (COUNTER_WORDS + GUARD_WORDS) * 4..)
+            .unwrap_or_default()
+            .to_vec();
         let word = |i: usize| {
             let at = row * h + 4 * i;
             u32::from_le_bytes(data[at..at + 4].try_into().unwrap())
@@ -99,6 +121,8 @@ impl CausticsReadback {
             image,
             counters,
             splat_guard,
+            alpha,
+            photons,
         })
     }
 }
@@ -127,9 +151,12 @@ fn copy_for_readback(
     s.requested -= 1;
     let row = (buffer.size.x * 16).div_ceil(256) * 256;
     let image_bytes = row as u64 * buffer.size.y as u64;
+    let photons = photon_map.filter(|_| s.photons).map(|p| &p.photons);
     let staging = ctx.render_device().create_buffer(&BufferDescriptor {
         label: Some("caustics:readback"),
-        size: image_bytes + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64,
+        size: image_bytes
+            + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64
+            + photons.map_or(0, |p| p.size()),
         usage: BufferUsages::MAP_READ | BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -200,6 +227,10 @@ fn copy_for_readback(
             image_bytes,
             Some((COUNTER_WORDS * 4) as u64),
         );
+    }
+    if let Some(p) = photons {
+        let at = image_bytes + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64;
+        encoder.copy_buffer_to_buffer(p, 0, &staging, at, Some(p.size()));
     }
     let ready = Arc::new(AtomicBool::new(false));
     let flag = ready.clone();

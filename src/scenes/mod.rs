@@ -385,6 +385,45 @@ pub fn glass_sphere() -> SceneDesc {
     s
 }
 
+/// The glass ball's floor caustic seen in a mirror: the ball of `glass_sphere` at x = 0.8
+/// under a sun straight down, a 3 x 2 m mirror (reflectance 0.9) standing at z = -1.5 facing
+/// +Z, and a camera that sees the caustic's reflection in the mirror past the ball.
+pub fn mirror_ball() -> SceneDesc {
+    let eye = Vec3::new(-1.5, 2.5, 3.5);
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.3, 0.6, -1.5)),
+        fov_y: 45f32.to_radians(),
+    };
+    let mut s = SceneDesc::new("mirror_ball", cam);
+    let grey = s.material("floor", diffuse(0.8), false);
+    let g = s.material("glass", glass(1.5, 1.0), false);
+    let m = s.material("mirror", mirror(0.9), false);
+    s.add("floor", geometry::quad(40.0, 40.0), grey, Vec3::ZERO);
+    s.add(
+        "ball",
+        geometry::uv_sphere(SPHERE_RADIUS, SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2),
+        g,
+        Vec3::new(0.8, 1.0, 0.0),
+    );
+    let k = s.add(
+        "mirror",
+        geometry::quad(3.0, 2.0),
+        m,
+        Vec3::new(0.5, 1.0, -1.5),
+    );
+    // Quad normal +Y turned to +Z.
+    s.nodes[k].rotation = Quat::from_rotation_x(core::f32::consts::FRAC_PI_2);
+    s.lights.push(LightDesc {
+        name: "sun".into(),
+        kind: LightKind::Directional { lux: SUN_LUX },
+        color: Vec3::ONE,
+        translation: Vec3::new(0.0, 5.0, 0.0),
+        rotation: shine_along(Vec3::NEG_Y),
+    });
+    s
+}
+
 /// A wavy water surface (IOR 1.33, slightly blue) 1 m above a pool floor, camera under water.
 pub fn pool() -> SceneDesc {
     let eye = Vec3::new(0.0, 0.7, 2.4);
@@ -482,6 +521,7 @@ pub fn all() -> Vec<SceneDesc> {
         pool(),
         ring(),
         empty(),
+        mirror_ball(),
         cornell::cornell_diamond(),
         cornell::cornell_ring(),
         cornell::cornell_ball(),

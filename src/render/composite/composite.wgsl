@@ -1,4 +1,6 @@
-// Adds caustic light to the lit HDR image: L = albedo / pi * E * exposure.
+// Adds caustic light to the lit HDR image: L = albedo / pi * E * exposure. A pixel whose
+// caustics-buffer alpha is negative shows a mirror: its value is F * albedo' * E of the point
+// the mirror reflects, and the composite adds it with albedo 1.
 //
 // E comes from the view's caustics buffer (lux, linear RGB). The diffuse albedo is decoded
 // from Bevy's deferred G-buffer (bevy_pbr deferred_gbuffer_from_pbr_input): .r holds
@@ -28,11 +30,14 @@ const MAX_RADIANCE: f32 = 6.0e4; // Rgba16Float's largest finite value is 65504.
 fn fragment(in: FullscreenVertexOutput) -> @location(0) vec4<f32> {
     let p = vec2<i32>(floor(in.position.xy));
     let g = textureLoad(gbuffer, p, 0);
-    let e = textureLoad(caustics, p, 0).rgb;
+    let c = textureLoad(caustics, p, 0);
+    let e = c.rgb;
     let flags = (g.a >> 24u) & 0xFFu;
     let empty = all(g == vec4<u32>(0u));
     var albedo = pow(unpack4x8unorm(g.r).rgb, vec3(2.2)) * (1.0 - unpack4x8unorm(g.b).g);
-    if params.white_albedo != 0u {
+    // Alpha -1: a pixel showing a mirror, whose value already holds the reflected surface's
+    // albedo and the mirror's Fresnel (the photon map's caustics seen in mirrors).
+    if params.white_albedo != 0u || c.a < 0.0 {
         albedo = vec3(1.0);
     }
     if empty || (flags & UNLIT_BIT) != 0u {

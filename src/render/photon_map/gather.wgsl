@@ -8,7 +8,7 @@
 @group(0) @binding(12) var<storage, read> sorted: array<Photon>;
 @group(0) @binding(13) var<storage, read> cells: array<u32>;
 // Per pixel: rgb the mean irradiance (lux) over the accumulated frames, w the distance from
-// the eye to the pixel's point (the stereo pair's depth test).
+// the eye to the pixel's point, negative where the pixel shows a mirror.
 @group(0) @binding(14) var<storage, read_write> accum: array<vec4<f32>>;
 @group(0) @binding(15) var view_depth: texture_depth_2d;
 @group(0) @binding(16) var gbuffer: texture_2d<u32>;
@@ -110,7 +110,9 @@ fn count_gather(g: GatherResult) {
 }
 
 // Blend this frame's irradiance into the pixel's running mean and write the caustics buffer.
-fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32) {
+// `mirror`: the value is a mirror pixel's `F · albedo · E` (its own albedo is already in it),
+// marked by alpha -1 for the composite (src/render/composite/composite.wgsl).
+fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32, mirror: bool) {
     let idx = u32(p.y) * u32(params.view.x) + u32(p.x);
     let e = select(vec3(0.0), e_in, finite3(e_in));
     var mean = e;
@@ -118,8 +120,74 @@ fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32) {
         let prev = accum[idx].xyz;
         mean = prev + (e - prev) * params.gather.x;
     }
-    accum[idx] = vec4(mean, dist);
-    textureStore(out_caustics, p, vec4(mean, 1.0));
+    // w: the eye distance, negative on a mirror pixel (kept for the frozen mean).
+    accum[idx] = vec4(mean, select(dist, -dist, mirror));
+    textureStore(out_caustics, p, vec4(mean, select(1.0, -1.0, mirror)));
+}
+
+// Caustics seen in a mirror: if the camera ray through x first hits a mirror at x, follow its
+// reflections (Schlick F per mirror) to the diffuse point they show and gather there, with the
+// footprint of the whole path. Returns `F · albedo · E` in rgb and w = 1, or w = 0 when the
+// pixel does not show a mirror (or the path ends on glass, the sky or the bounce limit).
+fn mirror_term(x: vec3<f32>) -> vec4<f32> {
+    let eye = params.eye.xyz;
+    let to = x - eye;
+    let dist = length(to);
+    if !(dist > 0.0) {
+        return vec4(0.0);
+    }
+    var d = to / dist;
+    let cos_alpha = dot(d, params.forward.xyz);
+    var hit = bvh_closest_hit(eye, d, 0.0, BVH_FAR);
+    // The pixel shows the mirror only if the ray meets it at the pixel's depth.
+    if hit.instance == BVH_INVALID || abs(hit.t - dist) > 0.01 * dist + 1.0e-4 * params.eye.w {
+        return vec4(0.0);
+    }
+    var s = surface_hit(hit, eye, d);
+    if s.kind != MAT_CONDUCTOR || !s.ok {
+        return vec4(0.0);
+    }
+    var f = vec3(1.0);
+    var travelled = hit.t;
+    for (var bounce = 0u; bounce < params.emit.z; bounce += 1u) {
+        f *= optics_fresnel_schlick(-dot(d, s.ns_f), materials[3u * hit.instance + 2u].xyz);
+        let o = optics_offset_ray_origin(s.pos, s.ng_f, params.eye.w);
+        d = reflect_guarded(d, s.ns_f, s.ng_f);
+        hit = bvh_closest_hit(o, d, 0.0, BVH_FAR);
+        if hit.instance == BVH_INVALID {
+            return vec4(0.0);
+        }
+        travelled += hit.t;
+        s = surface_hit(hit, o, d);
+        if !s.ok || s.kind == MAT_DIELECTRIC {
+            return vec4(0.0);
+        }
+        if s.kind == MAT_DIFFUSE {
+            let n = s.ng_f;
+            let area = optics_pixel_footprint_area(travelled, cos_alpha, dot(n, -d), params.lens.xy);
+            let cell = bitcast<f32>(atomicLoad(&header[H_CELL]));
+            let r = gather_radius(sqrt(params.view.z), select(0.0, area, params.lens.z != 0.0), cell);
+            let g = gather_at(s.pos, n, r);
+            count_gather(g);
+            atomicAdd(&header[C_MIRROR_PIXELS], 1u);
+            let albedo = materials[3u * hit.instance + 2u].xyz;
+            return vec4(f * albedo * g.e, 1.0);
+        }
+    }
+    return vec4(0.0);
+}
+
+// This pixel's value: its own gather, or for a pixel showing a mirror, the mirror's term.
+fn resolve_gathered(q: PixelInput, g: GatherResult) {
+    if (params.frame.w & FLAG_MIRRORS) != 0u {
+        let m = mirror_term(q.x);
+        if m.w != 0.0 {
+            resolve_pixel(q.p, m.xyz, distance(q.x, params.eye.xyz), true);
+            return;
+        }
+    }
+    count_gather(g);
+    resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz), false);
 }
 
 // Algorithm 1 of the seed, generalised to an 8x8 tile: when every pixel of the tile that has a
@@ -214,7 +282,8 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
     }
     if (params.frame.w & FLAG_FROZEN) != 0u {
         if in_view(p) {
-            textureStore(out_caustics, p, vec4(accum[idx].xyz, 1.0));
+            let a = accum[idx];
+            textureStore(out_caustics, p, vec4(a.xyz, select(1.0, -1.0, a.w < 0.0)));
         }
         return;
     }
@@ -246,10 +315,9 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
         if key != INVALID {
             let g = gather_shared(q, key, lid);
             if q.ok {
-                count_gather(g);
-                resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz));
+                resolve_gathered(q, g);
             } else if in_view(q.p) {
-                resolve_pixel(q.p, vec3(0.0), 0.0);
+                resolve_pixel(q.p, vec3(0.0), 0.0, false);
             }
             return;
         }
@@ -258,12 +326,10 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
         return;
     }
     if !q.ok {
-        resolve_pixel(q.p, vec3(0.0), 0.0);
+        resolve_pixel(q.p, vec3(0.0), 0.0, false);
         return;
     }
-    let g = gather_at(q.x, q.n, q.r);
-    count_gather(g);
-    resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz));
+    resolve_gathered(q, gather_at(q.x, q.n, q.r));
 }
 
 // One thread after the gather in the same pass: its read-write binding of the header makes

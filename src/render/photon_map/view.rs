@@ -32,6 +32,7 @@ pub const PARAMS_BYTES: u64 = 3 * 64 + 7 * 16;
 const FLAG_ACCUMULATE: u32 = 1;
 const FLAG_FROZEN: u32 = 2;
 const FLAG_SHARED: u32 = 4;
+const FLAG_MIRRORS: u32 = 8;
 
 /// What decides the buffers' sizes; a change reallocates them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,6 +110,7 @@ impl PhotonMapViewState {
             })
         };
         let storage = BufferUsages::STORAGE;
+        let traced = BufferUsages::STORAGE | BufferUsages::COPY_SRC;
         let cleared = BufferUsages::STORAGE | BufferUsages::COPY_DST | BufferUsages::COPY_SRC;
         let uniform = BufferUsages::UNIFORM | BufferUsages::COPY_DST;
         let cap = u64::from(key.capacity.max(1));
@@ -119,7 +121,7 @@ impl PhotonMapViewState {
             settings,
             params: buffer("caustics:photon_map:params", PARAMS_BYTES, uniform),
             grid_params: buffer("caustics:photon_map:grid_params", 16, uniform),
-            photons: buffer("caustics:photon_map:photons", cap * PHOTON_BYTES, storage),
+            photons: buffer("caustics:photon_map:photons", cap * PHOTON_BYTES, traced),
             sorted: buffer("caustics:photon_map:sorted", cap * PHOTON_BYTES, storage),
             header: buffer("caustics:photon_map:header", HEADER_WORDS * 4, cleared),
             cells: buffer("caustics:photon_map:cells", cell_words * 4, cleared),
@@ -254,7 +256,16 @@ pub fn prepare_photon_map_views(
         state.radius = r2.sqrt();
         let flags = if frozen { FLAG_FROZEN } else { 0 }
             | if state.frame > 1 { FLAG_ACCUMULATE } else { 0 }
-            | if settings.shared_memory { FLAG_SHARED } else { 0 };
+            | if settings.shared_memory {
+                FLAG_SHARED
+            } else {
+                0
+            }
+            | if settings.mirrors && scene.has_mirrors {
+                FLAG_MIRRORS
+            } else {
+                0
+            };
         write_uniforms(&queue, state, scene, view, clip_from_world, (r0, r2), flags);
         if let Some(s) = fresh.take() {
             e.insert(s);

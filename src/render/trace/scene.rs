@@ -180,6 +180,8 @@ pub struct TraceSceneBuffers {
     pub scene_scale: f32,
     /// The casters' bounding sphere: centre and radius, metres.
     pub casters: (Vec3, f32),
+    /// Whether any instance is a mirror (a conductor): cameras may see caustics in it.
+    pub has_mirrors: bool,
 }
 
 /// The render world's copy of the gathered scene.
@@ -249,6 +251,11 @@ impl TraceSceneBuffers {
             lights: lights.len() as u32,
             scene_scale,
             casters: caster_sphere(&scene.tlas).unwrap_or((Vec3::ZERO, 1.0)),
+            has_mirrors: scene
+                .tlas
+                .instances
+                .iter()
+                .any(|i| matches!(i.surface, crate::scene::Surface::Conductor { .. })),
         })
     }
 }
