@@ -40,8 +40,8 @@ use bevy::render::renderer::{RenderAdapter, RenderDevice};
 pub use components::validate::CausticsWarnings;
 pub use components::{
     AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsQuality,
-    CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, ImageSpaceSettings, PhotonMapSettings,
-    VolumeFace, mark_every_light,
+    CausticsStereo, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, ImageSpaceSettings,
+    PhotonMapSettings, StereoEye, VolumeFace, mark_every_light,
 };
 #[cfg(feature = "inspector")]
 pub use inspector::CausticsInspectorPlugin;
@@ -52,8 +52,8 @@ pub use render::CausticsDispatchLog;
 pub mod prelude {
     pub use crate::{
         AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsDebugView, CausticsPlugin,
-        CausticsQuality, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos,
-        ImageSpaceSettings, PhotonMapSettings, VolumeFace,
+        CausticsQuality, CausticsStereo, CausticsTechnique, CausticsVolume, CausticsVolumeGizmos,
+        ImageSpaceSettings, PhotonMapSettings, StereoEye, VolumeFace,
     };
 }
 
@@ -131,6 +131,7 @@ impl Plugin for CausticsPlugin {
             .register_type::<AapsSettings>()
             .register_type::<ImageSpaceSettings>()
             .register_type::<PhotonMapSettings>()
+            .register_type::<CausticsStereo>()
             .register_type::<CausticLight>()
             .register_type::<CausticMaterial>()
             .register_type::<CausticsVolume>()

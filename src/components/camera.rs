@@ -140,3 +140,38 @@ pub enum CausticsDebugView {
     /// (the inspector's A/B switch). Costs what `Off` costs, less the composite pass.
     Hidden,
 }
+
+/// Which eye of a stereo pair a caustics camera is.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum StereoEye {
+    /// Rendered first (give it the lower `Camera::order`); it traces the photons.
+    #[default]
+    Left,
+    /// Rendered second; reuses the left eye's work.
+    Right,
+}
+
+/// Pairs two caustics cameras as the eyes of one stereo view (a VR headset: two ordinary
+/// cameras, one per eye, as `bevy_mod_openxr` spawns them). Put it on both, with the same
+/// `pair`, and give the left eye the lower `Camera::order`.
+///
+/// What is shared:
+/// - `PhotonMap`: the photons are traced and the hash grid is built once per frame, by the
+///   left eye; the right eye gathers from the left's grid, and takes the left eye's gathered
+///   irradiance for every pixel whose point the left eye sees too (the point reprojected into
+///   the left view, interpolated over 4 pixels whose points lie within 2 % of its distance),
+///   gathering only the rest. Irradiance does not depend on the eye.
+/// - `Aaps`: one trace (the left eye's task buffer); each eye rasterises the splats with its own
+///   projection and depth.
+/// - `Volume`: each volume propagates once per frame for every view; each eye splats it.
+/// - `ImageSpace` and `Reference` run per eye.
+///
+/// Without a left partner, a right eye works alone.
+#[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[reflect(Component, Default, Clone)]
+pub struct CausticsStereo {
+    /// Which eye.
+    pub eye: StereoEye,
+    /// The pair's id (any value; both eyes share it).
+    pub pair: u32,
+}

@@ -61,6 +61,10 @@ pub struct PhotonMapSettings {
     /// diffuse point it shows, gathers there and shows `F · albedo / π · E`. Default true.
     /// Cost: one BVH ray per pixel while the scene holds a mirror; nothing otherwise.
     pub mirrors: bool,
+    /// The right eye of a [`crate::CausticsStereo`] pair takes the left eye's gathered
+    /// irradiance where both eyes see the same point. Default true. `false` makes the right
+    /// eye gather every pixel itself (it still shares the left eye's photons and grid).
+    pub stereo_reuse: bool,
 }
 
 impl Default for PhotonMapSettings {
@@ -75,6 +79,7 @@ impl Default for PhotonMapSettings {
             normal_threshold: 0.7,
             shared_memory: false,
             mirrors: true,
+            stereo_reuse: true,
         }
     }
 }
@@ -95,6 +100,7 @@ impl PhotonMapSettings {
             normal_threshold: f(self.normal_threshold, d.normal_threshold, -1.0, 1.0),
             shared_memory: self.shared_memory,
             mirrors: self.mirrors,
+            stereo_reuse: self.stereo_reuse,
         }
     }
 }

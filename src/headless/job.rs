@@ -80,6 +80,11 @@ pub struct RenderJob {
     pub image_space: crate::ImageSpaceSettings,
     /// Settings of the `photon_map` technique. Default: `PhotonMapSettings::default()`.
     pub photon_map: crate::PhotonMapSettings,
+    /// Render a stereo pair with this eye separation (metres): the scene's camera moved half
+    /// of it to the left is the left eye, a second camera half of it to the right the right
+    /// eye (`CausticsStereo`); the caustics buffer and counters read back are the right
+    /// eye's, the frame the left eye's. Default None.
+    pub stereo: Option<f32>,
     /// Technique `photon_map`: read the last frame's stored photons back into
     /// [`RenderReport::photon_map_photons`] (tests). Default false.
     pub read_photons: bool,
@@ -111,6 +116,7 @@ impl Default for RenderJob {
             image_space: Default::default(),
             photon_map: Default::default(),
             read_photons: false,
+            stereo: None,
             every_frame: false,
             volume: Default::default(),
         }
@@ -487,6 +493,7 @@ struct Handles {
     scene: Handle<bevy::gltf::Gltf>,
     target: Handle<Image>,
     twin: Option<Handle<Image>>,
+    right: Option<Handle<Image>>,
 }
 
 #[derive(Component)]
@@ -640,10 +647,12 @@ fn start(
     };
     let target = target_image(format);
     let twin = job.0.linear.then(|| target_image(format));
+    let right = job.0.stereo.map(|_| target_image(format));
     commands.insert_resource(Handles {
         scene,
         target,
         twin,
+        right,
     });
 }
 
@@ -885,7 +894,11 @@ fn spawn_cameras(
     } else {
         Tonemapping::default()
     };
-    let transform = gt.compute_transform();
+    let mut transform = gt.compute_transform();
+    let centre = transform;
+    if let Some(sep) = job.stereo {
+        transform.translation -= transform.rotation * Vec3::X * (0.5 * sep);
+    }
     let mut main = commands.spawn((
         job.aaps.clone(),
         job.image_space.clone(),
@@ -902,10 +915,40 @@ fn spawn_cameras(
         transform,
         tonemapping,
         exposure,
-        caustics,
+        caustics.clone(),
     ));
     if !job.window {
         main.insert(RenderTarget::Image(handles.target.clone().into()));
+    }
+    if let (Some(sep), Some(right)) = (job.stereo, &handles.right) {
+        main.insert(crate::CausticsStereo {
+            eye: crate::StereoEye::Left,
+            pair: 0,
+        });
+        let mut t = centre;
+        t.translation += t.rotation * Vec3::X * (0.5 * sep);
+        commands.spawn((
+            job.aaps.clone(),
+            job.image_space.clone(),
+            job.photon_map.clone(),
+            Camera3d::default(),
+            Camera {
+                order: 3,
+                ..default()
+            },
+            RenderTarget::Image(right.clone().into()),
+            Hdr,
+            Msaa::Off,
+            projection.clone(),
+            t,
+            tonemapping,
+            exposure,
+            caustics.clone(),
+            crate::CausticsStereo {
+                eye: crate::StereoEye::Right,
+                pair: 0,
+            },
+        ));
     }
 
     if let Some(twin) = &handles.twin {

@@ -28,8 +28,8 @@ use bevy::render::sync_component::SyncComponent;
 use bevy::render::{Render, RenderApp, RenderSystems};
 
 use crate::components::{
-    AapsSettings, Caustics, CausticsDebugView, CausticsTechnique, ImageSpaceSettings,
-    PhotonMapSettings,
+    AapsSettings, Caustics, CausticsDebugView, CausticsStereo, CausticsTechnique,
+    ImageSpaceSettings, PhotonMapSettings,
 };
 use crate::reference::{CausticImage, CausticsReferenceImage};
 
@@ -70,6 +70,8 @@ pub struct ExtractedCaustics {
     pub image_space: ImageSpaceSettings,
     /// Photon-map settings (the camera's [`PhotonMapSettings`] or the defaults).
     pub photon_map: PhotonMapSettings,
+    /// The camera's [`CausticsStereo`], if it is one eye of a pair.
+    pub stereo: Option<CausticsStereo>,
     /// Photon budget per light (the quality preset).
     pub photons_per_light: u64,
     /// Composite as if albedo were 1.
@@ -91,17 +93,19 @@ impl ExtractComponent for Caustics {
         Option<&'static AapsSettings>,
         Option<&'static ImageSpaceSettings>,
         Option<&'static PhotonMapSettings>,
+        Option<&'static CausticsStereo>,
     );
     type QueryFilter = ();
     type Out = ExtractedCaustics;
 
     fn extract_component(
-        (c, reference, aaps, image_space, photon_map): (
+        (c, reference, aaps, image_space, photon_map, stereo): (
             &Caustics,
             Option<&CausticsReferenceImage>,
             Option<&AapsSettings>,
             Option<&ImageSpaceSettings>,
             Option<&PhotonMapSettings>,
+            Option<&CausticsStereo>,
         ),
     ) -> Option<Self::Out> {
         let reference = reference.map(|r| (r.image.clone(), r.serial));
@@ -115,6 +119,7 @@ impl ExtractComponent for Caustics {
             aaps: aaps.cloned().unwrap_or_default(),
             image_space: image_space.cloned().unwrap_or_default(),
             photon_map: photon_map.cloned().unwrap_or_default(),
+            stereo: stereo.copied(),
             photons_per_light: c.quality.photons_per_light(),
             white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
             hidden: c.debug_view == CausticsDebugView::Hidden,

@@ -141,7 +141,14 @@ fn copy_for_readback(
     readback: Res<CausticsReadback>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, _, aaps, volume, image_space, photon_map) = view.into_inner();
+    let (buffer, caustics, aaps, volume, image_space, photon_map) = view.into_inner();
+    // A stereo pair is read back through its right eye.
+    if caustics
+        .stereo
+        .is_some_and(|s| s.eye == crate::StereoEye::Left)
+    {
+        return;
+    }
     let Ok(mut s) = readback.0.lock() else {
         return;
     };

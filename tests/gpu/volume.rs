@@ -384,3 +384,46 @@ fn volume_cornell_scenes_use_their_gltf_volumes() {
         assert_eq!(c.nan_guards, 0, "{name}");
     }
 }
+
+/// Stereo (two cameras 6.4 cm apart, `CausticsStereo`): each volume propagates once per frame
+/// for both eyes (its slab passes run at most once a frame) and each eye splats it into its
+/// own caustics buffer (the splat pass runs twice a frame); the right eye's buffer has
+/// caustics.
+#[test]
+fn volume_stereo_propagates_once() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        technique: CausticsTechnique::Volume,
+        width: 64,
+        height: 64,
+        frames: 6,
+        stereo: Some(0.064),
+        volume: CausticsVolume {
+            photons: 20_000,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+    .expect("render");
+    let count = |f: &Vec<String>, p: &str| f.iter().filter(|q| q.as_str() == p).count();
+    let mut propagated = 0;
+    for (n, f) in report.frame_passes.iter().enumerate() {
+        assert!(count(f, "caustics/volume/slab1") <= 1, "frame {n}: {f:?}");
+        assert!(count(f, "caustics/volume/project") <= 1, "frame {n}: {f:?}");
+        if !f.is_empty() {
+            assert_eq!(count(f, "caustics/volume/splat"), 2, "frame {n}: {f:?}");
+        }
+        propagated += count(f, "caustics/volume/slab1");
+    }
+    let img = report.caustics.expect("the right eye's caustics");
+    println!(
+        "stereo volume: slab passes in {propagated} of {} frames, right-eye energy {:.0}",
+        report.frame_passes.len(),
+        img.sum().x
+    );
+    assert!(img.all_finite() && img.sum().x > 0.0);
+}

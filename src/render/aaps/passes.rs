@@ -13,7 +13,7 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 
 use super::pipelines::AapsPipelines;
-use super::view::{AapsFrame, AapsViewState, LEVEL_STRIDE};
+use super::view::{AapsFrame, AapsStereo, AapsViewState, LEVEL_STRIDE};
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
@@ -60,14 +60,16 @@ pub fn aaps_passes(
         &ViewPrepassTextures,
         &AapsViewState,
         &AapsFrame,
+        Option<&AapsStereo>,
     )>,
+    states: Query<&AapsViewState>,
     scene: Option<Res<TraceSceneBuffers>>,
     pipelines: Res<AapsPipelines>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _) = view.into_inner();
+    let (buffer, prepass, state, _, stereo) = view.into_inner();
     let Some(scene) = scene else {
         return;
     };
@@ -111,6 +113,33 @@ pub fn aaps_passes(
     let texel_groups = (atlas * atlas).div_ceil(64);
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
+
+    // The right eye of a stereo pair: the left eye's splats (this frame's, drawn with the
+    // left eye's arguments) with its own projection and depth; no trace.
+    if let Some(left) = stereo.and_then(|s| states.get(s.left).ok())
+        && left.key.splat_capacity == state.key.splat_capacity
+    {
+        let group = ctx.render_device().create_bind_group(
+            "caustics:bind_group:aaps_splat_right",
+            &cache.get_bind_group_layout(&pipelines.splat_layout),
+            &BindGroupEntries::sequential((
+                state.params.as_entire_binding(),
+                left.splats.as_entire_binding(),
+                depth,
+                state.world_from_clip.as_entire_binding(),
+            )),
+        );
+        splat_passes(
+            &mut ctx,
+            diagnostics,
+            (state, &left.args),
+            buffer,
+            (splat, splat_msaa),
+            &group,
+            &log,
+        );
+        return;
+    }
 
     // Last frame's result becomes the history of the variance pass.
     ctx.command_encoder().copy_texture_to_texture(
@@ -189,7 +218,7 @@ pub fn aaps_passes(
     splat_passes(
         &mut ctx,
         diagnostics,
-        state,
+        (state, &state.args),
         buffer,
         (splat, splat_msaa),
         &splat_group,
@@ -290,7 +319,7 @@ fn bind_groups(
 fn splat_passes(
     ctx: &mut RenderContext,
     diagnostics: Option<&DiagnosticsRecorder>,
-    state: &AapsViewState,
+    (state, args): (&AapsViewState, &bevy::render::render_resource::Buffer),
     buffer: &ViewCausticsBuffer,
     (splat, splat_msaa): (&RenderPipeline, Option<&RenderPipeline>),
     splat_group: &BindGroup,
@@ -317,7 +346,7 @@ fn splat_passes(
         let span = diagnostics.pass_span(&mut pass, SPLAT_MSAA_PASS);
         pass.set_render_pipeline(pipeline);
         pass.set_bind_group(0, splat_group, &[]);
-        pass.draw_indirect(&state.args, 12 * 4);
+        pass.draw_indirect(args, 12 * 4);
         span.end(&mut pass);
         cleared = true;
         log.record(SPLAT_MSAA_PASS);
@@ -346,7 +375,7 @@ fn splat_passes(
         let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
         pass.set_render_pipeline(splat);
         pass.set_bind_group(0, splat_group, &[]);
-        pass.draw_indirect(&state.args, 8 * 4);
+        pass.draw_indirect(args, 8 * 4);
         span.end(&mut pass);
     }
     log.record(SPLAT_PASS);

@@ -95,6 +95,17 @@ pub struct AapsViewState {
 #[derive(Component)]
 pub struct AapsFrame;
 
+/// On the right eye of a [`crate::CausticsStereo`] pair whose left eye runs AAPS: the left
+/// eye's view entity. The right eye traces nothing; it rasterises the left eye's splats with
+/// its own projection and depth ("one trace, splats per eye"). Splats the left eye culled by
+/// its frustum are missing along the right eye's outer edge (a strip as wide as the eyes'
+/// parallax).
+#[derive(Component, Clone, Copy, Debug)]
+pub struct AapsStereo {
+    /// The left eye's view entity.
+    pub left: Entity,
+}
+
 /// The atlas layout for `lights` tiles of side `tile`: (atlas side, tile, tiles per row).
 pub fn atlas_layout(tile: u32, lights: u32) -> (u32, u32, u32) {
     let per_row = (lights.max(1) as f32).sqrt().ceil() as u32;
@@ -348,8 +359,25 @@ pub fn prepare_aaps_views(
         Option<&mut AapsViewState>,
     )>,
 ) {
+    // Left eyes of stereo pairs that run AAPS, by pair.
+    let lefts: std::collections::HashMap<u32, Entity> = views
+        .iter()
+        .filter(|(_, c, ..)| c.technique == CausticsTechnique::Aaps)
+        .filter_map(|(entity, c, ..)| {
+            let s = c.stereo.filter(|s| s.eye == crate::StereoEye::Left)?;
+            Some((s.pair, entity))
+        })
+        .collect();
     for (entity, caustics, camera, view, state) in &mut views {
         let mut e = commands.entity(entity);
+        match caustics
+            .stereo
+            .filter(|s| s.eye == crate::StereoEye::Right)
+            .and_then(|s| lefts.get(&s.pair))
+        {
+            Some(&left) => e.insert(AapsStereo { left }),
+            None => e.remove::<AapsStereo>(),
+        };
         let size = camera.physical_viewport_size.unwrap_or_default();
         // A zero photon budget (quality `Custom { photons: 0 }`) runs nothing.
         let active = caustics.technique == CausticsTechnique::Aaps

@@ -13,6 +13,8 @@
 @group(0) @binding(15) var view_depth: texture_depth_2d;
 @group(0) @binding(16) var gbuffer: texture_2d<u32>;
 @group(0) @binding(17) var out_caustics: texture_storage_2d<rgba32float, write>;
+// A right eye's left eye's `accum` (a 16-byte dummy for other views).
+@group(0) @binding(18) var<storage, read> left_accum: array<vec4<f32>>;
 
 // Pixel to world through the prepass depth (reverse-Z NDC); w = 0 where nothing was drawn.
 fn pixel_point(p: vec2<i32>, size: vec2<f32>) -> vec4<f32> {
@@ -177,6 +179,48 @@ fn mirror_term(x: vec3<f32>) -> vec4<f32> {
     return vec4(0.0);
 }
 
+// The right eye of a stereo pair: the left eye's mean where the left eye sees the same point.
+// x is reprojected into the left view and the left means are interpolated bilinearly from the
+// 4 pixels around it; each tap's point must lie where x does (its distance from the left eye
+// within 2 % of x's: one pixel's footprint at grazing angles stays within it), else the pixel
+// gathers itself (an edge or a disocclusion). w = 1 when reused. Both eyes have the same size.
+fn stereo_reuse(x: vec3<f32>) -> vec4<f32> {
+    atomicAdd(&header[C_STEREO_PIXELS], 1u);
+    let c = params.other_clip_from_world * vec4(x, 1.0);
+    if !(c.w > 0.0) {
+        return vec4(0.0);
+    }
+    let ndc = c.xy / c.w;
+    let size = params.view.xy;
+    let pf = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y) - 0.5;
+    if !all(pf >= vec2(0.0)) || !all(pf <= size - 1.0) {
+        return vec4(0.0);
+    }
+    let base = vec2<u32>(floor(pf));
+    let f = pf - floor(pf);
+    let d = distance(x, params.other_eye.xyz);
+    var sum = vec3(0.0);
+    for (var k = 0u; k < 4u; k += 1u) {
+        let o = vec2(k & 1u, k >> 1u);
+        let q = min(base + o, vec2<u32>(size) - 1u);
+        let a = left_accum[q.y * u32(size.x) + q.x];
+        if !(a.w > 0.0) || abs(a.w - d) > 0.02 * d || !finite3(a.xyz) {
+            return vec4(0.0);
+        }
+        let w = select(1.0 - f.x, f.x, o.x == 1u) * select(1.0 - f.y, f.y, o.y == 1u);
+        sum += w * a.xyz;
+    }
+    atomicAdd(&header[C_STEREO_REUSED], 1u);
+    return vec4(sum, 1.0);
+}
+
+// Store a value that is already a mean (a reused left-eye pixel) without blending.
+fn store_pixel(p: vec2<i32>, e: vec3<f32>, dist: f32) {
+    let idx = u32(p.y) * u32(params.view.x) + u32(p.x);
+    accum[idx] = vec4(e, dist);
+    textureStore(out_caustics, p, vec4(e, 1.0));
+}
+
 // This pixel's value: its own gather, or for a pixel showing a mirror, the mirror's term.
 fn resolve_gathered(q: PixelInput, g: GatherResult) {
     if (params.frame.w & FLAG_MIRRORS) != 0u {
@@ -328,6 +372,13 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
     if !q.ok {
         resolve_pixel(q.p, vec3(0.0), 0.0, false);
         return;
+    }
+    if (params.frame.w & FLAG_REUSE) != 0u {
+        let s = stereo_reuse(q.x);
+        if s.w != 0.0 {
+            store_pixel(q.p, s.xyz, distance(q.x, params.eye.xyz));
+            return;
+        }
     }
     resolve_gathered(q, gather_at(q.x, q.n, q.r));
 }

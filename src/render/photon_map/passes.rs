@@ -12,7 +12,7 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
 use super::pipelines::{GRID_ENTRIES, PhotonMapPipelines, grid_dispatches, photon_groups};
-use super::view::{PhotonMapFrame, PhotonMapViewState};
+use super::view::{PhotonMapFrame, PhotonMapStereo, PhotonMapViewState};
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
@@ -23,8 +23,11 @@ pub const TRACE_PASS: &str = "caustics/photon_map/trace";
 pub const GRID_PASS: &str = "caustics/photon_map/grid";
 /// Per-pixel gather into the progressive mean and the caustics buffer.
 pub const GATHER_PASS: &str = "caustics/photon_map/gather";
+/// The gather of the right eye of a stereo pair (from the left eye's grid, reusing its
+/// gathers where both eyes see the same point).
+pub const GATHER_RIGHT_PASS: &str = "caustics/photon_map/gather_right";
 /// Every pass, in order.
-pub const ALL_PASSES: [&str; 3] = [TRACE_PASS, GRID_PASS, GATHER_PASS];
+pub const ALL_PASSES: [&str; 4] = [TRACE_PASS, GRID_PASS, GATHER_PASS, GATHER_RIGHT_PASS];
 
 /// Counters read into diagnostics (`render/caustics/photon_map/<name>`), by header word
 /// (`C_*` in photon.wgsl).
@@ -68,14 +71,22 @@ pub fn photon_map_passes(
         &ViewPrepassTextures,
         &PhotonMapViewState,
         &PhotonMapFrame,
+        Option<&PhotonMapStereo>,
     )>,
+    states: Query<&PhotonMapViewState>,
     scene: Option<Res<TraceSceneBuffers>>,
-    pipelines: Res<PhotonMapPipelines>,
+    pipelines: Option<Res<PhotonMapPipelines>>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _) = view.into_inner();
+    let (buffer, prepass, state, _, stereo) = view.into_inner();
+    let Some(pipelines) = pipelines else {
+        return;
+    };
+    // A right eye gathers from its left eye's photons and grid.
+    let left = stereo.and_then(|s| states.get(s.left).ok());
+    let src = left.unwrap_or(state);
     let Some(scene) = scene else {
         return;
     };
@@ -113,14 +124,26 @@ pub fn photon_map_passes(
             (9, state.params.as_entire_binding()),
             (10, state.photons.as_entire_binding()),
             (11, state.header.as_entire_binding()),
-            (12, state.sorted.as_entire_binding()),
-            (13, state.cells.as_entire_binding()),
+            (12, src.sorted.as_entire_binding()),
+            (13, src.cells.as_entire_binding()),
             (14, state.accum.as_entire_binding()),
             (15, depth),
             (16, gbuffer),
             (17, &buffer.view),
+            (
+                18,
+                left.filter(|_| stereo.is_some_and(|s| s.reuse))
+                    .map_or(&state.dummy, |l| &l.accum)
+                    .as_entire_binding(),
+            ),
         )),
     );
+    if let Some(left) = left {
+        // Its own counters, the left eye's grid layout (header words 32..64).
+        let encoder = ctx.command_encoder();
+        encoder.clear_buffer(&state.header, 0, None);
+        encoder.copy_buffer_to_buffer(&left.header, 128, &state.header, 128, Some(128));
+    }
     if state.traces {
         let grid_group = ctx.render_device().create_bind_group(
             "caustics:bind_group:photon_map_grid",
@@ -160,15 +183,20 @@ pub fn photon_map_passes(
         log.record(GRID_PASS);
     }
     let size = state.key.size;
+    let name = if left.is_some() {
+        GATHER_RIGHT_PASS
+    } else {
+        GATHER_PASS
+    };
     compute_pass(
         &mut ctx,
-        GATHER_PASS,
+        name,
         &[
             (gather, &group, [size.x.div_ceil(8), size.y.div_ceil(8), 1]),
             (fence, &group, [1, 1, 1]),
         ],
     );
-    log.record(GATHER_PASS);
+    log.record(name);
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     for (name, word) in PHOTON_MAP_COUNTERS {

@@ -1,6 +1,7 @@
 //! The photon map's pipelines: the tracer module (the shared tracer's WGSL, photon.wgsl,
-//! trace.wgsl, the G-buffer decoder and gather.wgsl: entry points `pm_trace` and
-//! `pm_gather`) and the grid module (photon.wgsl + grid.wgsl), created in `RenderStartup`.
+//! trace.wgsl, the G-buffer decoder and gather.wgsl: entry points `pm_trace`, `pm_gather` and
+//! `pm_fence`) and the grid module (photon.wgsl + grid.wgsl), queued when a camera first uses
+//! the technique.
 
 use bevy::prelude::*;
 use bevy::render::render_resource::{
@@ -94,11 +95,23 @@ pub struct PhotonMapPipelines {
     pub grid: [CachedComputePipelineId; 8],
 }
 
-pub(super) fn init_photon_map_pipelines(
+/// Queue the pipelines the first time a camera uses the photon map (in `PrepareResources`):
+/// an app that never does compiles none of them (lavapipe's compiler takes seconds for the
+/// tracer module, and every app start paid it before).
+pub(super) fn queue_photon_map_pipelines(
     mut commands: Commands,
     shaders: Res<PhotonMapShaders>,
     cache: Res<PipelineCache>,
+    existing: Option<Res<PhotonMapPipelines>>,
+    views: Query<&crate::render::ExtractedCaustics>,
 ) {
+    if existing.is_some()
+        || !views
+            .iter()
+            .any(|c| c.technique == crate::CausticsTechnique::PhotonMap)
+    {
+        return;
+    }
     use binding_types::*;
     let ro = || storage_buffer_read_only_sized(false, None);
     let rw = || storage_buffer_sized(false, None);
@@ -127,6 +140,7 @@ pub(super) fn init_photon_map_pipelines(
                     17,
                     texture_storage_2d(CAUSTICS_BUFFER_FORMAT, StorageTextureAccess::WriteOnly),
                 ),
+                (18, ro()),
             ),
         ),
     );

@@ -19,6 +19,7 @@ struct PmParams {
     gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, 0, 0
     lens: vec4<f32>,     // focal lengths fx, fy (px); z 1 for a perspective camera (footprint floor)
     forward: vec4<f32>,  // the camera's forward axis (xyz)
+    other_eye: vec4<f32>, // the left eye's position (xyz), for a right eye that reuses
 }
 
 const FLAG_ACCUMULATE: u32 = 1u; // blend into the running mean (else replace it)
@@ -31,44 +32,54 @@ const FLAG_REUSE: u32 = 16u;     // this view is a right eye: reuse the left eye
 @group(0) @binding(10) var<storage, read_write> photons: array<Photon>;
 @group(0) @binding(11) var<storage, read_write> header: array<atomic<u32>>;
 
-fn store_photon(pos: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, n: vec3<f32>) {
-    let slot = atomicAdd(&header[H_COUNT], 1u);
-    if slot >= params.emit.w {
-        atomicAdd(&header[C_OVERFLOW], 1u);
-        return;
-    }
-    photons[slot] = Photon(pos, oct_encode(d), flux, oct_encode(n));
+// What one photon's path came to. Its counts are summed per workgroup first: one global
+// atomic per workgroup and counter instead of one per photon, and one slot reservation per
+// workgroup for the stored photons.
+struct PathEnd {
+    // 0 nothing, 1 emitted and stored (`pos`..`n` hold it), 2 emitted and not stored.
+    state: u32,
+    // Outcome counters: C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN as 1 << (k), TIR count in bits 8+.
+    counts: u32,
+    pos: vec3<f32>,
+    d: vec3<f32>,
+    flux: vec3<f32>,
+    n: vec3<f32>,
 }
 
-@compute @workgroup_size(64)
-fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = flat_index(gid, groups, 64u);
+const END_DIRECT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_MAX_DEPTH: u32 = 4u;
+const END_NAN: u32 = 8u;
+
+fn trace_photon(i: u32) -> PathEnd {
+    var end: PathEnd;
     let per_light = params.emit.x;
     if per_light == 0u || i >= per_light * params.emit.y {
-        return;
+        return end;
     }
     let light = lights[i / per_light];
     let k = i % per_light;
     let e = light_emit(light, optics_r2_point(k, params.frame.xy));
     var flux = light.power.xyz * (e.weight / f32(per_light));
     if !finite3(flux) || all(flux <= vec3(0.0)) {
-        return;
+        return end;
     }
-    atomicAdd(&header[C_EMITTED], 1u);
+    end.state = 2u;
     let scale = params.eye.w;
     let key = i * 0x9e3779b9u + params.frame.z;
     var o = e.o;
     var d = e.d;
     var medium = INVALID;
     var bounces = 0u;
+    var tir = 0u;
     // max_bounces <= 128 specular events (PhotonMapSettings::sanitized), then the diffuse one.
     for (var guard = 0u; guard < 130u; guard += 1u) {
         let hit = bvh_closest_hit(o, d, 0.0, BVH_FAR);
         if hit.instance == BVH_INVALID {
             if bounces == 0u {
-                atomicAdd(&header[C_MISSED], 1u);
+                end.counts |= END_MISSED;
             }
-            return;
+            break;
         }
         if medium != INVALID {
             let mm = materials[3u * medium];
@@ -76,20 +87,24 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         }
         let s = surface_hit(hit, o, d);
         if !s.ok || !finite3(flux) {
-            atomicAdd(&header[C_NAN], 1u);
-            return;
+            end.counts |= END_NAN;
+            break;
         }
         if s.kind == MAT_DIFFUSE {
             if bounces == 0u {
-                atomicAdd(&header[C_DIRECT], 1u);
+                end.counts |= END_DIRECT;
             } else {
-                store_photon(s.pos, d, flux, s.ng_f);
+                end.state = 1u;
+                end.pos = s.pos;
+                end.d = d;
+                end.flux = flux;
+                end.n = s.ng_f;
             }
-            return;
+            break;
         }
         if bounces >= params.emit.z {
-            atomicAdd(&header[C_MAX_DEPTH], 1u);
-            return;
+            end.counts |= END_MAX_DEPTH;
+            break;
         }
         bounces += 1u;
         if s.kind == MAT_CONDUCTOR {
@@ -109,7 +124,7 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         }
         var refract = false;
         if r >= 1.0 || t.w == 0.0 {
-            atomicAdd(&header[C_TIR], 1u);
+            tir += 1u;
         } else {
             refract = optics_hash_unit(key, bounces) >= r;
         }
@@ -122,6 +137,61 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         } else {
             d = reflect_guarded(d, s.ns_f, s.ng_f);
             o = optics_offset_ray_origin(s.pos, s.ng_f, scale);
+        }
+    }
+    end.counts |= min(tir, 0xffffffu) << 8u;
+    return end;
+}
+
+// Workgroup sums: emitted, stored, direct, missed, max depth, NaN, TIR.
+var<workgroup> wg_counts: array<atomic<u32>, 7>;
+var<workgroup> wg_base: u32;
+
+@compute @workgroup_size(64)
+fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    if lid < 7u {
+        atomicStore(&wg_counts[lid], 0u);
+    }
+    workgroupBarrier();
+    let end = trace_photon(flat_index(gid, groups, 64u));
+    var local = 0u;
+    if end.state != 0u {
+        atomicAdd(&wg_counts[0], 1u);
+    }
+    if end.state == 1u {
+        local = atomicAdd(&wg_counts[1], 1u);
+    }
+    for (var k = 0u; k < 4u; k += 1u) {
+        if (end.counts & (1u << k)) != 0u {
+            atomicAdd(&wg_counts[2u + k], 1u);
+        }
+    }
+    if (end.counts >> 8u) != 0u {
+        atomicAdd(&wg_counts[6], end.counts >> 8u);
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        let stored = atomicLoad(&wg_counts[1]);
+        let base = atomicAdd(&header[H_COUNT], stored);
+        wg_base = base;
+        let cap = params.emit.w;
+        let over = select(0u, base + stored - max(base, cap), base + stored > cap);
+        let words = array<u32, 7>(C_EMITTED, 0u, C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_TIR);
+        for (var k = 0u; k < 7u; k += 1u) {
+            let v = atomicLoad(&wg_counts[k]);
+            if k != 1u && v != 0u {
+                atomicAdd(&header[words[k]], v);
+            }
+        }
+        if over != 0u {
+            atomicAdd(&header[C_OVERFLOW], over);
+        }
+    }
+    workgroupBarrier();
+    if end.state == 1u {
+        let slot = wg_base + local;
+        if slot < params.emit.w {
+            photons[slot] = Photon(end.pos, oct_encode(end.d), end.flux, oct_encode(end.n));
         }
     }
 }

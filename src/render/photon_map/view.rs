@@ -27,12 +27,13 @@ pub const H_CELL: usize = 48;
 /// Header word: 1 / cell size, f32 bits.
 pub const H_INV: usize = 49;
 /// Bytes of the per-view uniforms (`PmParams` in trace.wgsl).
-pub const PARAMS_BYTES: u64 = 3 * 64 + 7 * 16;
+pub const PARAMS_BYTES: u64 = 3 * 64 + 8 * 16;
 
 const FLAG_ACCUMULATE: u32 = 1;
 const FLAG_FROZEN: u32 = 2;
 const FLAG_SHARED: u32 = 4;
 const FLAG_MIRRORS: u32 = 8;
+const FLAG_REUSE: u32 = 16;
 
 /// What decides the buffers' sizes; a change reallocates them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -90,9 +91,30 @@ pub struct PhotonMapViewState {
     pub serial: u32,
     /// This frame's gather radius, metres.
     pub radius: f32,
-    /// Whether this frame traces and builds (false when the mean is frozen).
+    /// Whether this frame traces and builds (false when the mean is frozen, or for a right
+    /// eye that shares its left eye's photons).
     pub traces: bool,
+    /// A 16-byte buffer bound where a view has no left eye's mean to read.
+    pub dummy: Buffer,
     accumulating: Option<Accumulating>,
+}
+
+/// On the right eye of a [`crate::CausticsStereo`] pair: the render-world view of its left
+/// eye, whose photons, grid (and, with `reuse`, gathered irradiance) it uses this frame.
+#[derive(Component, Clone, Copy, Debug)]
+pub struct PhotonMapStereo {
+    /// The left eye's view entity.
+    pub left: Entity,
+    /// Whether pixels the left eye also sees take its irradiance.
+    pub reuse: bool,
+}
+
+/// What the right eye of a pair needs of its left eye.
+#[derive(Clone, Copy)]
+struct LeftEye {
+    entity: Entity,
+    clip_from_world: Mat4,
+    eye: Vec3,
 }
 
 /// Marks a view whose photon-map passes run this frame.
@@ -138,6 +160,7 @@ impl PhotonMapViewState {
             serial: 0,
             radius: 0.0,
             traces: false,
+            dummy: buffer("caustics:photon_map:dummy", 16, storage),
             accumulating: None,
         }
     }
@@ -186,6 +209,20 @@ pub fn prepare_photon_map_views(
     )>,
 ) {
     let limits = limits.map(|l| l.clone()).unwrap_or_default();
+    // Left eyes of stereo pairs that run the photon map, by pair.
+    let lefts: std::collections::HashMap<u32, LeftEye> = views
+        .iter()
+        .filter(|(_, c, ..)| c.technique == CausticsTechnique::PhotonMap)
+        .filter_map(|(entity, c, _, view, _)| {
+            let s = c.stereo.filter(|s| s.eye == crate::StereoEye::Left)?;
+            let left = LeftEye {
+                entity,
+                clip_from_world: crate::render::clip_from_world(view),
+                eye: view.world_from_view.translation(),
+            };
+            Some((s.pair, left))
+        })
+        .collect();
     for (entity, caustics, camera, view, state) in &mut views {
         let mut e = commands.entity(entity);
         let size = camera.physical_viewport_size.unwrap_or_default();
@@ -247,26 +284,50 @@ pub fn prepare_photon_map_views(
             };
             state.serial = state.serial.wrapping_add(1);
         }
-        state.traces = !frozen;
+        let left = caustics
+            .stereo
+            .filter(|s| s.eye == crate::StereoEye::Right)
+            .and_then(|s| lefts.get(&s.pair).copied());
+        state.traces = !frozen && left.is_none();
         let r2 = if settings.progressive {
             progressive_radius2(r0 * r0, state.frame, settings.alpha)
         } else {
             r0 * r0
         };
         state.radius = r2.sqrt();
-        let flags = if frozen { FLAG_FROZEN } else { 0 }
-            | if state.frame > 1 { FLAG_ACCUMULATE } else { 0 }
-            | if settings.shared_memory {
-                FLAG_SHARED
-            } else {
-                0
+        let reuse = left.is_some() && settings.stereo_reuse;
+        // A right eye that reuses gathers pixel by pixel (its tiles are not uniform).
+        let mut flags = 0;
+        for (on, flag) in [
+            (frozen, FLAG_FROZEN),
+            (state.frame > 1, FLAG_ACCUMULATE),
+            (settings.shared_memory && !reuse, FLAG_SHARED),
+            (settings.mirrors && scene.has_mirrors, FLAG_MIRRORS),
+            (reuse, FLAG_REUSE),
+        ] {
+            if on {
+                flags |= flag;
             }
-            | if settings.mirrors && scene.has_mirrors {
-                FLAG_MIRRORS
-            } else {
-                0
-            };
-        write_uniforms(&queue, state, scene, view, clip_from_world, (r0, r2), flags);
+        }
+        let other = left.map_or((clip_from_world, Vec3::ZERO), |l| {
+            (l.clip_from_world, l.eye)
+        });
+        write_uniforms(
+            &queue,
+            state,
+            (scene, view),
+            [clip_from_world, other.0],
+            other.1,
+            (r0, r2),
+            flags,
+        );
+        match left {
+            Some(l) => e.insert(PhotonMapStereo {
+                left: l.entity,
+                reuse,
+            }),
+            None => e.remove::<PhotonMapStereo>(),
+        };
         if let Some(s) = fresh.take() {
             e.insert(s);
         }
@@ -277,9 +338,9 @@ pub fn prepare_photon_map_views(
 fn write_uniforms(
     queue: &RenderQueue,
     state: &PhotonMapViewState,
-    scene: &TraceSceneBuffers,
-    view: &ExtractedView,
-    clip_from_world: Mat4,
+    (scene, view): (&TraceSceneBuffers, &ExtractedView),
+    [clip_from_world, other_clip_from_world]: [Mat4; 2],
+    other_eye: Vec3,
     (r0, r2): (f32, f32),
     flags: u32,
 ) {
@@ -289,7 +350,7 @@ fn write_uniforms(
     let mut b = Vec::with_capacity(PARAMS_BYTES as usize);
     f32s(&mut b, &clip_from_world.inverse().to_cols_array());
     f32s(&mut b, &clip_from_world.to_cols_array());
-    f32s(&mut b, &clip_from_world.to_cols_array());
+    f32s(&mut b, &other_clip_from_world.to_cols_array());
     let eye = view.world_from_view.translation();
     f32s(&mut b, &[eye.x, eye.y, eye.z, scene.scene_scale]);
     let size = state.key.size.as_vec2();
@@ -332,6 +393,7 @@ fn write_uniforms(
     );
     let forward = view.world_from_view.forward();
     f32s(&mut b, &[forward.x, forward.y, forward.z, 0.0]);
+    f32s(&mut b, &[other_eye.x, other_eye.y, other_eye.z, 0.0]);
     debug_assert_eq!(b.len() as u64, PARAMS_BYTES);
     queue.write_buffer(&state.params, 0, &b);
     let mut g = Vec::with_capacity(16);
