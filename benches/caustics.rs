@@ -215,6 +215,22 @@ fn stored(grid: &optics::PhotonGrid, pts: &[glam::Vec3]) -> Vec<optics::StoredPh
         .collect()
 }
 
+/// Every photon within `r` of each query (the hash grid's gather, no heap), summed.
+fn gather_all(
+    grid: &optics::PhotonGrid,
+    ph: &[optics::StoredPhoton],
+    qs: &[glam::Vec3],
+    r: f32,
+) -> f32 {
+    qs.iter()
+        .map(|q| {
+            optics::gather(grid, ph, *q, glam::Vec3::Y, r, -1.0)
+                .irradiance
+                .x
+        })
+        .sum()
+}
+
 /// Seed 001 table 1: build + one radius query per gather point, kd-tree (kiddo) against the
 /// hash grid (`optics::build_grid` + `optics::gather`, the GPU's twin), on the CPU.
 fn bench_photon_map_table1(c: &mut Criterion) {
@@ -247,13 +263,7 @@ fn bench_photon_map_table1(c: &mut Criterion) {
                 b.iter(|| {
                     let grid = optics::build_grid(&pts, r, 1.0 / r, optics::MAX_GRID_CELLS);
                     let ph = stored(&grid, &pts);
-                    qs.iter()
-                        .map(|q| {
-                            optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0)
-                                .irradiance
-                                .x
-                        })
-                        .sum::<f32>()
+                    gather_all(&grid, &ph, &qs, r)
                 })
             });
         }
@@ -301,15 +311,7 @@ fn bench_photon_map_table2(c: &mut Criterion) {
                 })
             });
             g.bench_function(format!("{side}x{side}_r{r}/all_within_r"), |b| {
-                b.iter(|| {
-                    qs.iter()
-                        .map(|q| {
-                            optics::gather(&grid, &ph, *q, glam::Vec3::Y, r, -1.0)
-                                .irradiance
-                                .x
-                        })
-                        .sum::<f32>()
-                })
+                b.iter(|| gather_all(&grid, &ph, &qs, r))
             });
         }
     }

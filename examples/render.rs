@@ -6,6 +6,7 @@
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
 //!     [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]
+//!     [--stereo METRES]
 //! ```
 //!
 //! The scene path is relative to the working directory (its buffers and images to the glTF's
@@ -68,6 +69,17 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
             "--width" => job.width = num(v, a)?.min(u32::MAX as u64) as u32,
             "--height" => job.height = num(v, a)?.min(u32::MAX as u64) as u32,
             "--photons" => job.photons = Some(num(v, a)?),
+            "--stereo" => {
+                // A stereo pair this many metres apart (`CausticsStereo`; the outputs are the
+                // right eye's caustics and the left eye's frame).
+                let t = v.ok_or("--stereo needs the eye separation in metres")?;
+                let sep: f32 = t
+                    .parse()
+                    .ok()
+                    .filter(|x: &f32| x.is_finite() && *x >= 0.0)
+                    .ok_or_else(|| format!("--stereo expects metres >= 0, got '{t}'"))?;
+                job.stereo = Some(sep);
+            }
             "--frames" => job.frames = num(v, a)?.min(u32::MAX as u64) as u32,
             "--seed" => job.seed = num(v, a)?,
             "--ev100" => {
@@ -198,6 +210,8 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                         "max_frames" => a.max_frames = f()? as u32,
                         "normal_threshold" => a.normal_threshold = f()?,
                         "shared_memory" => a.shared_memory = f()? != 0.0,
+                        "mirrors" => a.mirrors = f()? != 0.0,
+                        "stereo_reuse" => a.stereo_reuse = f()? != 0.0,
                         _ => return Err(format!("--photon-map: unknown field '{k}'")),
                     }
                 }
@@ -217,7 +231,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES]")?;
     Ok((job, out))
 }
 

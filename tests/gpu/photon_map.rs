@@ -256,13 +256,7 @@ fn wgsl_grid_build_matches_cpu_exactly() {
     if !require_gpu() {
         return;
     }
-    let instance = wgpu::Instance::default();
-    let adapter =
-        bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-            .expect("adapter");
-    let (device, queue) =
-        bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
-            .expect("device");
+    let (device, queue) = super::twins::plain_device();
     let mut rng = Pcg32::new(5, 1);
     let mut random = |n: usize, lo: Vec3, hi: Vec3| -> Vec<Vec3> {
         (0..n)

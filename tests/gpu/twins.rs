@@ -126,13 +126,7 @@ fn run_compute(
     out_len: usize,
 ) -> Vec<u8> {
     use wgpu::util::DeviceExt;
-    let instance = wgpu::Instance::default();
-    let adapter =
-        bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-            .expect("adapter");
-    let (device, queue) =
-        bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
-            .expect("device");
+    let (device, queue) = plain_device();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(entry),
         source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -207,6 +201,16 @@ fn run_compute(
         .poll(wgpu::PollType::wait_indefinitely())
         .expect("poll");
     read.slice(..).get_mapped_range().to_vec()
+}
+
+/// A plain wgpu device on the default adapter (no Bevy), for compute-only tests.
+pub(super) fn plain_device() -> (wgpu::Device, wgpu::Queue) {
+    let instance = wgpu::Instance::default();
+    let adapter =
+        bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+            .expect("adapter");
+    bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
+        .expect("device")
 }
 
 fn f4_bytes(v: &[[f32; 4]]) -> Vec<u8> {

@@ -40,6 +40,23 @@ fn from_sortable_bits(u: u32) -> f32 {
     return select(bitcast<f32>(~u), bitcast<f32>(u & 0x7fffffffu), (u & 0x80000000u) != 0u);
 }
 
+// Hillis-Steele over the workgroup's 256 thread totals: the sum of the totals of the threads
+// before `lid`. Every invocation must call it (barriers).
+fn threads_exclusive_scan(lid: u32, total: u32) -> u32 {
+    scan_shared[lid] = total;
+    workgroupBarrier();
+    for (var off = 1u; off < SCAN_THREADS; off *= 2u) {
+        var add = 0u;
+        if lid >= off {
+            add = scan_shared[lid - off];
+        }
+        workgroupBarrier();
+        scan_shared[lid] += add;
+        workgroupBarrier();
+    }
+    return scan_shared[lid] - total;
+}
+
 fn grid_stored() -> u32 {
     return atomicLoad(&header[H_STORED]);
 }
@@ -58,18 +75,32 @@ fn grid_key(p: vec3<f32>, dims: vec3<u32>) -> u32 {
     return (c.z * dims.y + c.y) * dims.x + c.x;
 }
 
+// The workgroup's bounds first (workgroup atomics), then one global atomic per axis and
+// workgroup instead of one per photon.
+var<workgroup> wg_bounds: array<atomic<u32>, 6>;
+
 @compute @workgroup_size(64)
-fn grid_bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn grid_bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    if lid < 6u {
+        atomicStore(&wg_bounds[lid], 0u);
+    }
+    workgroupBarrier();
     let i = flat_index(gid, groups, 64u);
     let n = min(atomicLoad(&header[H_COUNT]), grid_params.capacity);
-    if i >= n {
-        return;
+    if i < n {
+        let p = photons[i].pos;
+        for (var a = 0u; a < 3u; a += 1u) {
+            let s = sortable_bits(p[a]);
+            atomicMax(&wg_bounds[a], ~s);
+            atomicMax(&wg_bounds[3u + a], s);
+        }
     }
-    let p = photons[i].pos;
-    for (var a = 0u; a < 3u; a += 1u) {
-        let s = sortable_bits(p[a]);
-        atomicMax(&header[H_MIN + a], ~s);
-        atomicMax(&header[H_MAX + a], s);
+    workgroupBarrier();
+    if lid < 6u {
+        let v = atomicLoad(&wg_bounds[lid]);
+        if v != 0u {
+            atomicMax(&header[select(H_MAX + lid - 3u, H_MIN + lid, lid < 3u)], v);
+        }
     }
 }
 
@@ -152,19 +183,7 @@ fn grid_scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
         sum += x;
         v[k] = sum;
     }
-    scan_shared[lid] = sum;
-    workgroupBarrier();
-    // Hillis-Steele over the threads' totals.
-    for (var off = 1u; off < SCAN_THREADS; off *= 2u) {
-        var add = 0u;
-        if lid >= off {
-            add = scan_shared[lid - off];
-        }
-        workgroupBarrier();
-        scan_shared[lid] += add;
-        workgroupBarrier();
-    }
-    let before = scan_shared[lid] - sum;
+    let before = threads_exclusive_scan(lid, sum);
     for (var k = 0u; k < SCAN_ITEMS; k += 1u) {
         let i = base + k;
         if i < len {
@@ -172,7 +191,7 @@ fn grid_scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
         }
     }
     if lid == SCAN_THREADS - 1u {
-        blocks[block] = scan_shared[lid];
+        blocks[block] = before + sum;
     }
 }
 
@@ -192,18 +211,7 @@ fn grid_scan_top(@builtin(local_invocation_index) lid: u32) {
         v[k] = sum;
         sum += x;
     }
-    scan_shared[lid] = sum;
-    workgroupBarrier();
-    for (var off = 1u; off < SCAN_THREADS; off *= 2u) {
-        var add = 0u;
-        if lid >= off {
-            add = scan_shared[lid - off];
-        }
-        workgroupBarrier();
-        scan_shared[lid] += add;
-        workgroupBarrier();
-    }
-    let before = scan_shared[lid] - sum;
+    let before = threads_exclusive_scan(lid, sum);
     for (var k = 0u; k < TOP_ITEMS; k += 1u) {
         let i = base + k;
         if i < len {
