@@ -6,11 +6,13 @@
 
 mod adapter;
 mod check;
+mod counters;
 mod job;
 mod volume;
 
 pub use crate::volume::volume_from_extras;
 pub use adapter::{adapter_limits, decode_f16_rgba, find_adapter, quiet_headless_environment};
 pub use check::check_job;
+pub use counters::*;
 pub use job::*;
 pub use volume::VolumeCounters;
