@@ -141,6 +141,14 @@ pub struct ViewCausticsBuffer {
     pub uploaded: u64,
 }
 
+/// Workgroups of 64 for `n` threads (one per photon) as a 2D grid, at most 65 535 along x;
+/// the shaders rebuild the index as `y · groups.x · 64 + x`.
+pub fn photon_groups(n: u32) -> [u32; 3] {
+    let groups = n.div_ceil(64).max(1);
+    let x = groups.min(65_535);
+    [x, groups.div_ceil(x), 1]
+}
+
 /// A view-sized `Rgba32Float` texture (the caustics buffer, the volumes' splat target).
 /// A view's clip-from-world matrix (the extracted one, else projection × inverse view).
 pub(crate) fn clip_from_world(view: &bevy::render::view::ExtractedView) -> Mat4 {

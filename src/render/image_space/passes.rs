@@ -18,7 +18,7 @@ use super::view::{
     COUNTER_WORDS, ImageSpaceFrame, ImageSpaceScene, ImageSpaceViewState, LIGHT_STRIDE,
     SMALL_STRIDE,
 };
-use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
+use crate::render::{CausticsDispatchLog, ViewCausticsBuffer, photon_groups};
 
 /// The RSM layers (opaque, caster front, caster back); the spans time the first light's.
 pub const RSM_PASSES: [&str; 3] = [
@@ -149,13 +149,6 @@ fn compute_pass(
         pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
     }
     span.end(&mut pass);
-}
-
-/// Workgroups of 64 for `n` threads as a 2D grid (at most 65 535 along x).
-pub fn photon_groups(n: u32) -> [u32; 3] {
-    let groups = n.div_ceil(64).max(1);
-    let x = groups.min(65_535);
-    [x, groups.div_ceil(x), 1]
 }
 
 /// The system.

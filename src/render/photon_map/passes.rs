@@ -11,8 +11,9 @@ use bevy::render::render_resource::{
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
-use super::pipelines::{GRID_ENTRIES, PhotonMapPipelines, grid_dispatches, photon_groups};
+use super::pipelines::{GRID_ENTRIES, PhotonMapPipelines, grid_dispatches};
 use super::view::{PhotonMapFrame, PhotonMapStereo, PhotonMapViewState};
+use crate::render::photon_groups;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 

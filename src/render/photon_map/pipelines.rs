@@ -13,6 +13,7 @@ use bevy::shader::Shader;
 
 use crate::optics::SCAN_BLOCK;
 use crate::render::CAUSTICS_BUFFER_FORMAT;
+use crate::render::photon_groups;
 
 /// The WGSL of the tracer module (trace and gather).
 pub fn compute_source() -> String {
@@ -43,13 +44,6 @@ pub const GRID_ENTRIES: [&str; 8] = [
     "grid_scatter",
     "grid_fence",
 ];
-
-/// Workgroups of 64 for `n` threads as a 2D grid (at most 65 535 along x).
-pub fn photon_groups(n: u32) -> [u32; 3] {
-    let groups = n.div_ceil(64).max(1);
-    let x = groups.min(65_535);
-    [x, groups.div_ceil(x), 1]
-}
 
 /// The workgroups of each [`GRID_ENTRIES`] dispatch for a photon buffer of `capacity` and a
 /// cell array of `cell_words` words (the budget + 1). Shared by the plugin and the exactness
