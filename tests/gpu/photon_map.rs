@@ -618,6 +618,119 @@ fn photon_map_caustics_seen_in_mirror() {
     assert!((ratio - 1.0).abs() < 0.10, "ratio {ratio}");
 }
 
+/// Caustics seen through glass (item 6): the composite writes the caustic into the opaque frame
+/// before Bevy's transmissive pass copies it, so glass in front of a caustic shows it. A thin,
+/// grey glass pane (`specular_transmission` 1, `thickness` 0, IOR 1.5, base colour 0.6) fills
+/// the view 0.5 m in front of the camera of `glass_sphere`. Bevy's screen-space transmission of
+/// such a pane samples the frame behind it at the same pixel and scales it by
+/// `(1 - F_schlick(0.04, cos θt)) · specular_transmission · base_color` (bevy_pbr
+/// `transmission.wgsl`), about 0.576 at these angles. So at every pixel whose ray, past the
+/// pane, meets the floor, the frame with caustics minus the twin without must be that factor
+/// times the composite's term `albedo / π · E · exposure`: not 0 (the caustic does not reach
+/// the image through glass) and not 1 (it is added over the glass).
+#[test]
+fn photon_map_caustics_seen_through_glass() {
+    use bevy::prelude::*;
+    use bevy_caustics::{CausticMaterial, Caustics};
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    const PANE_DISTANCE: f32 = 0.5;
+    const PANE_GREY: f32 = 0.6;
+    fn pane(world: &mut World) {
+        let eye = world
+            .query_filtered::<&Transform, With<Caustics>>()
+            .iter(world)
+            .next()
+            .copied()
+            .expect("caustics camera");
+        let mesh = world
+            .resource_mut::<Assets<Mesh>>()
+            .add(Rectangle::new(8.0, 8.0));
+        let material = world
+            .resource_mut::<Assets<StandardMaterial>>()
+            .add(StandardMaterial {
+                base_color: Color::linear_rgb(PANE_GREY, PANE_GREY, PANE_GREY),
+                specular_transmission: 1.0,
+                thickness: 0.0,
+                ior: 1.5,
+                perceptual_roughness: 0.0,
+                ..default()
+            });
+        world.spawn((
+            Name::new("pane"),
+            Mesh3d(mesh),
+            MeshMaterial3d(material),
+            CausticMaterial::Dielectric {
+                ior: 1.5,
+                attenuation_color: Color::WHITE,
+                attenuation_distance: f32::INFINITY,
+                thin: true,
+            },
+            eye * Transform::from_xyz(0.0, 0.0, -PANE_DISTANCE),
+        ));
+    }
+    let side = 64u32;
+    let report = photon_map_sized(
+        RenderJob {
+            scene: scene("glass_sphere"),
+            frames: 4,
+            linear: true,
+            hook: Some(pane),
+            ..Default::default()
+        },
+        side,
+    );
+    let e = report.caustics.as_ref().expect("caustics buffer");
+    // Which pixels see the floor past the pane (the pane is not in the CPU scene).
+    let (tlas, _, cam) = bevy_caustics::scenes::glass_sphere().to_trace(side, side);
+    let focal = bevy_caustics::optics::PixelFocal::from_fov_y(45f32.to_radians(), side, side);
+    let half = side as f32 * 0.5;
+    let (mut added, mut expected, mut floor_pixels, mut lit) = (0.0f64, 0.0f64, 0, 0);
+    for (i, (w, wo)) in report
+        .linear_with
+        .iter()
+        .zip(&report.linear_without)
+        .enumerate()
+    {
+        assert!(w.iter().chain(wo).all(|c| c.is_finite()), "pixel {i}");
+        let (x, y) = (
+            (i as u32 % side) as f32 + 0.5,
+            (i as u32 / side) as f32 + 0.5,
+        );
+        let local = glam::Vec3::new((x - half) / focal.fx, -(y - half) / focal.fy, -1.0);
+        let d = cam.world_from_view.transform_vector3(local).normalize();
+        let Some(hit) = tlas.closest_hit(cam.position(), d, 0.0, f32::INFINITY, |_| false) else {
+            continue;
+        };
+        if tlas.instances[hit.instance as usize].surface.is_specular() {
+            continue;
+        }
+        floor_pixels += 1;
+        // Bevy's Fresnel term, at the refracted angle inside the pane (its normal faces the eye).
+        let cos_i = -local.normalize().z;
+        let cos_t = (1.0 - (1.0 - cos_i * cos_i) / (1.5 * 1.5)).sqrt();
+        let fresnel = 0.04 + 0.96 * (1.0 - cos_t).powi(5);
+        let through = (1.0 - fresnel) * PANE_GREY;
+        let term = 0.8 / std::f32::consts::PI * e.data[i].y * report.exposure;
+        added += (w[1] - wo[1]) as f64;
+        expected += (through * term) as f64;
+        if term > 0.0 {
+            lit += 1;
+        }
+    }
+    let ratio = added / expected;
+    println!(
+        "through glass: {floor_pixels} floor pixels behind the pane ({lit} with caustic): added {added:.4}, \
+         expected {expected:.4} (ratio {ratio:.4}); pane factor ≈ {:.3}",
+        0.96 * PANE_GREY
+    );
+    assert!(lit > 100, "only {lit} caustic pixels behind the pane");
+    // f16 frames and the pane's own reflection (the same in both frames) leave about 1 %.
+    assert!((ratio - 1.0).abs() < 0.03, "ratio {ratio}");
+}
+
 /// Stereo (two cameras 6.4 cm apart, `CausticsStereo`): the photons are traced and the grid
 /// built once per frame; the right eye's caustics buffer with reuse equals its own full gather
 /// (reuse off) within 1 % energy and FLIP 0.02. The share of right-eye pixels reused and the
