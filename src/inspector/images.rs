@@ -272,7 +272,7 @@ fn init_pipeline(
 }
 
 /// Colour-map the shown images of the inspected view.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn colour_map_pass(
     view: ViewQuery<(
         &MainEntity,
@@ -287,6 +287,7 @@ fn colour_map_pass(
     pipeline: Option<Res<InspectPipeline>>,
     cache: Res<PipelineCache>,
     gpu_images: Res<RenderAssets<GpuImage>>,
+    settle: Res<crate::render::span::SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (main, buffer, _, aaps, image_space, photon_map) = view.into_inner();
@@ -412,6 +413,7 @@ fn colour_map_pass(
             timestamp_writes: None,
         });
     let span = diagnostics.pass_span(&mut pass, INSPECTOR_PASS);
+    settle.settle(&mut pass);
     pass.set_pipeline(compute);
     for (bind_group, size) in &work {
         pass.set_bind_group(0, bind_group, &[]);

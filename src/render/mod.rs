@@ -10,6 +10,7 @@ pub mod composite;
 pub mod image_space;
 pub mod photon_map;
 pub mod readback;
+pub mod span;
 pub mod trace;
 pub mod volume;
 
@@ -279,6 +280,7 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
         photon_map::build(app);
     }
     readback::build(app);
+    span::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };

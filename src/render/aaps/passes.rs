@@ -14,6 +14,7 @@ use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 
 use super::pipelines::AapsPipelines;
 use super::view::{AapsFrame, AapsStereo, AapsViewState, LEVEL_STRIDE};
+use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
@@ -53,7 +54,7 @@ pub const COUNTERS: [(&str, u64); 11] = [
 ];
 
 /// All passes of the view.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn aaps_passes(
     view: ViewQuery<(
         &ViewCausticsBuffer,
@@ -67,6 +68,7 @@ pub fn aaps_passes(
     pipelines: Res<AapsPipelines>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
+    settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _, stereo) = view.into_inner();
@@ -131,7 +133,7 @@ pub fn aaps_passes(
         );
         splat_passes(
             &mut ctx,
-            diagnostics,
+            (diagnostics, &settle),
             (state, &left.args),
             buffer,
             (splat, splat_msaa),
@@ -172,6 +174,7 @@ pub fn aaps_passes(
             timestamp_writes: None,
         });
         let span = diagnostics.pass_span(&mut pass, TASK_PASS);
+        settle.settle(&mut pass);
         pass.set_pipeline(leaves);
         pass.set_bind_group(0, &main, &[0]);
         pass.dispatch_workgroups(texel_groups, 1, 1);
@@ -197,6 +200,7 @@ pub fn aaps_passes(
             timestamp_writes: None,
         });
         let span = diagnostics.pass_span(&mut pass, TRACE_PASS);
+        settle.settle(&mut pass);
         pass.set_pipeline(trace);
         pass.set_bind_group(0, &main, &[0]);
         pass.dispatch_workgroups_indirect(&state.args, 0);
@@ -217,7 +221,7 @@ pub fn aaps_passes(
 
     splat_passes(
         &mut ctx,
-        diagnostics,
+        (diagnostics, &settle),
         (state, &state.args),
         buffer,
         (splat, splat_msaa),
@@ -233,6 +237,7 @@ pub fn aaps_passes(
             timestamp_writes: None,
         });
         let span = diagnostics.pass_span(&mut pass, UPDATE_PASS);
+        settle.settle(&mut pass);
         pass.set_bind_group(0, &main, &[0]);
         pass.set_pipeline(variance);
         pass.dispatch_workgroups_indirect(&state.args, 4 * 4);
@@ -318,7 +323,7 @@ fn bind_groups(
 /// MSAA pass).
 fn splat_passes(
     ctx: &mut RenderContext,
-    diagnostics: Option<&DiagnosticsRecorder>,
+    (diagnostics, settle): (Option<&DiagnosticsRecorder>, &SpanSettle),
     (state, args): (&AapsViewState, &bevy::render::render_resource::Buffer),
     buffer: &ViewCausticsBuffer,
     (splat, splat_msaa): (&RenderPipeline, Option<&RenderPipeline>),
@@ -344,6 +349,7 @@ fn splat_passes(
             multiview_mask: None,
         });
         let span = diagnostics.pass_span(&mut pass, SPLAT_MSAA_PASS);
+        settle.settle(&mut pass);
         pass.set_render_pipeline(pipeline);
         pass.set_bind_group(0, splat_group, &[]);
         pass.draw_indirect(args, 12 * 4);
@@ -373,6 +379,7 @@ fn splat_passes(
             multiview_mask: None,
         });
         let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
+        settle.settle(&mut pass);
         pass.set_render_pipeline(splat);
         pass.set_bind_group(0, splat_group, &[]);
         pass.draw_indirect(args, 8 * 4);

@@ -137,6 +137,7 @@ pub fn composite_caustics(
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,
     log: Res<CausticsDispatchLog>,
+    settle: Res<crate::render::span::SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (target, prepass, buffer, camera, caustics, id, aaps, volume, image_space, photon_map) =
@@ -188,6 +189,7 @@ pub fn composite_caustics(
         multiview_mask: None,
     });
     let span = diagnostics.pass_span(&mut pass, COMPOSITE_PASS);
+    settle.settle(&mut pass);
     pass.set_render_pipeline(render_pipeline);
     pass.set_bind_group(0, &bind_group, &[]);
     pass.draw(0..3, 0..1);

@@ -18,6 +18,7 @@ use super::view::{
     COUNTER_WORDS, ImageSpaceFrame, ImageSpaceScene, ImageSpaceViewState, LIGHT_STRIDE,
     SMALL_STRIDE,
 };
+use crate::render::span::SpanSettle;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer, photon_groups};
 
 /// The RSM layers (opaque, caster front, caster back); the spans time the first light's.
@@ -86,6 +87,7 @@ struct Ctx<'a> {
     depth: &'a TextureView,
     gbuffer: &'a TextureView,
     materials: &'a bevy::render::render_resource::Buffer,
+    settle: &'a SpanSettle,
 }
 
 impl Ctx<'_> {
@@ -130,6 +132,7 @@ impl Ctx<'_> {
 
 fn compute_pass(
     ctx: &mut RenderContext,
+    settle: &SpanSettle,
     name: &'static str,
     pipeline: &ComputePipeline,
     group: &BindGroup,
@@ -143,6 +146,7 @@ fn compute_pass(
         timestamp_writes: None,
     });
     let span = diagnostics.pass_span(&mut pass, name);
+    settle.settle(&mut pass);
     pass.set_pipeline(pipeline);
     for (offsets, groups) in dispatches {
         pass.set_bind_group(0, group, offsets);
@@ -164,6 +168,7 @@ pub fn image_space_passes(
     pipelines: Res<ImageSpacePipelines>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
+    settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _) = view.into_inner();
@@ -186,7 +191,15 @@ pub fn image_space_passes(
     let (Some(compute), Some(rsm)) = (compute, rsm) else {
         return;
     };
-    rsm_passes(&mut ctx, state, scene.as_ref(), &pipelines, &cache, &rsm);
+    rsm_passes(
+        &mut ctx,
+        &settle,
+        state,
+        scene.as_ref(),
+        &pipelines,
+        &cache,
+        &rsm,
+    );
     for name in RSM_PASSES {
         log.record(name);
     }
@@ -197,6 +210,7 @@ pub fn image_space_passes(
         depth,
         gbuffer,
         materials: &scene.scene.materials,
+        settle: &settle,
     };
     let d_in = &state.dummy_in;
     let d_out = &state.dummy_out;
@@ -242,10 +256,12 @@ pub fn image_space_passes(
                 dispatches.push(([0, step], [size.x.div_ceil(8), size.y.div_ceil(8), 1]));
             }
         }
-        compute_pass(&mut ctx, HIZ_PASS, compute[6], &group, &dispatches);
+        compute_pass(&mut ctx, &settle, HIZ_PASS, compute[6], &group, &dispatches);
         log.record(HIZ_PASS);
     }
-    compute_pass(&mut ctx, TRACE_PASS, compute[0], &group, &per_light);
+    compute_pass(
+        &mut ctx, &settle, TRACE_PASS, compute[0], &group, &per_light,
+    );
     log.record(TRACE_PASS);
     let parity = (state.frame & 1) as usize;
     let (cur, prev) = (parity, 1 - parity);
@@ -261,6 +277,7 @@ pub fn image_space_passes(
     );
     compute_pass(
         &mut ctx,
+        &settle,
         RESOLVE_PASS,
         compute[1],
         &group,
@@ -309,7 +326,14 @@ fn svgf_passes(
             out: [&s.filter[1].1, &s.moments[cur].1, &d_out[2]],
         },
     );
-    compute_pass(ctx, TEMPORAL_PASS, compute[2], &group, &[([0, 0], full)]);
+    compute_pass(
+        ctx,
+        c.settle,
+        TEMPORAL_PASS,
+        compute[2],
+        &group,
+        &[([0, 0], full)],
+    );
     log.record(TEMPORAL_PASS);
     let n = s.settings.atrous_iterations;
     let target =
@@ -328,7 +352,14 @@ fn svgf_passes(
             out: [target(0, 0), history(0), &d_out[2]],
         },
     );
-    compute_pass(ctx, VARIANCE_PASS, compute[3], &group, &[([0, 0], full)]);
+    compute_pass(
+        ctx,
+        c.settle,
+        VARIANCE_PASS,
+        compute[3],
+        &group,
+        &[([0, 0], full)],
+    );
     log.record(VARIANCE_PASS);
     if n == 0 {
         return;
@@ -358,6 +389,7 @@ fn svgf_passes(
         timestamp_writes: None,
     });
     let span = diagnostics.pass_span(&mut pass, ATROUS_PASS);
+    c.settle.settle(&mut pass);
     for (k, stages) in groups.iter().enumerate() {
         let offsets = [0, ((k as u64 + 1) * SMALL_STRIDE) as u32];
         for (j, group) in stages.iter().enumerate() {
@@ -373,6 +405,7 @@ fn svgf_passes(
 /// The three layers of every light's RSM.
 fn rsm_passes(
     ctx: &mut RenderContext,
+    settle: &SpanSettle,
     state: &ImageSpaceViewState,
     scene: &ImageSpaceScene,
     pipelines: &ImageSpacePipelines,
@@ -421,6 +454,9 @@ fn rsm_passes(
                 multiview_mask: None,
             });
             let span = (l == 0).then(|| diagnostics.pass_span(&mut pass, RSM_PASSES[layer]));
+            if l == 0 {
+                settle.settle(&mut pass);
+            }
             if scene.scene.tri_count > 0 {
                 pass.set_render_pipeline(pipeline);
                 pass.set_bind_group(0, &group, &[(l as u64 * SMALL_STRIDE) as u32]);

@@ -14,6 +14,7 @@ use bevy::render::renderer::{RenderContext, ViewQuery};
 use super::pipelines::{GRID_ENTRIES, PhotonMapPipelines, grid_dispatches};
 use super::view::{PhotonMapFrame, PhotonMapStereo, PhotonMapViewState};
 use crate::render::photon_groups;
+use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
@@ -45,6 +46,7 @@ pub const PHOTON_MAP_COUNTERS: [(&str, u64); 8] = [
 
 fn compute_pass(
     ctx: &mut RenderContext,
+    settle: &SpanSettle,
     name: &'static str,
     stages: &[(&ComputePipeline, &BindGroup, [u32; 3])],
 ) {
@@ -56,6 +58,7 @@ fn compute_pass(
         timestamp_writes: None,
     });
     let span = diagnostics.pass_span(&mut pass, name);
+    settle.settle(&mut pass);
     for (pipeline, group, groups) in stages {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, *group, &[]);
@@ -65,7 +68,7 @@ fn compute_pass(
 }
 
 /// The system.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn photon_map_passes(
     view: ViewQuery<(
         &ViewCausticsBuffer,
@@ -79,6 +82,7 @@ pub fn photon_map_passes(
     pipelines: Option<Res<PhotonMapPipelines>>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
+    settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _, stereo) = view.into_inner();
@@ -175,12 +179,13 @@ pub fn photon_map_passes(
         let bounds = stages.remove(0);
         compute_pass(
             &mut ctx,
+            &settle,
             TRACE_PASS,
             &[(trace, &group, photon_groups(photons)), bounds],
         );
         log.record(TRACE_PASS);
         ctx.command_encoder().clear_buffer(&state.cells, 0, None);
-        compute_pass(&mut ctx, GRID_PASS, &stages);
+        compute_pass(&mut ctx, &settle, GRID_PASS, &stages);
         log.record(GRID_PASS);
     }
     let size = state.key.size;
@@ -191,6 +196,7 @@ pub fn photon_map_passes(
     };
     compute_pass(
         &mut ctx,
+        &settle,
         name,
         &[
             (gather, &group, [size.x.div_ceil(8), size.y.div_ceil(8), 1]),

@@ -179,6 +179,7 @@ fn volume_gizmo_pass(
     pipeline: Res<GizmoPipeline>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
+    settle: Res<crate::render::span::SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (target, prepass, state) = view.into_inner();
@@ -219,6 +220,7 @@ fn volume_gizmo_pass(
         })],
     ));
     let span = diagnostics.pass_span(&mut pass, GIZMO_PASS);
+    settle.settle(&mut pass);
     pass.set_render_pipeline(render);
     pass.set_bind_group(0, &group, &[]);
     pass.draw(0..state.count, 0..1);

@@ -21,6 +21,7 @@ use bevy::render::renderer::{RenderContext, ViewQuery};
 use super::gpu::{CNT, PROBE_STRIDE, VolumeGpu, tile_stride};
 use super::pipelines::VolumePipelines;
 use super::view::{VolumeStore, VolumeViewFrame, VolumeViewState};
+use crate::render::span::SpanSettle;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 use crate::volume::VolumeRun;
 
@@ -122,6 +123,7 @@ pub(super) fn colour_pass<'a>(
 #[allow(clippy::too_many_arguments)]
 fn raster_gbuffer(
     ctx: &mut RenderContext,
+    settle: &SpanSettle,
     pipeline: &bevy::render::render_resource::RenderPipeline,
     group: &bevy::render::render_resource::BindGroup,
     color: &TextureView,
@@ -149,6 +151,7 @@ fn raster_gbuffer(
         multiview_mask: None,
     });
     let span = diagnostics.pass_span(&mut pass, name);
+    settle.settle(&mut pass);
     if tri_count > 0 {
         pass.set_render_pipeline(pipeline);
         pass.set_bind_group(0, group, &[probe * PROBE_STRIDE as u32]);
@@ -159,8 +162,10 @@ fn raster_gbuffer(
 
 /// Run `run` on volume `v`: slabs from `run.first_slab` on (none when it is `slabs`), then
 /// the projectors over `run.project`.
+#[allow(clippy::too_many_arguments)]
 fn update_volume(
     ctx: &mut RenderContext,
+    settle: &SpanSettle,
     v: &VolumeGpu,
     run: VolumeRun,
     store: &VolumeStore,
@@ -225,6 +230,7 @@ fn update_volume(
         let (prop_name, gbuf_name) = SLAB_PASSES[(k as usize).min(MAX_SLABS - 1)];
         raster_gbuffer(
             ctx,
+            settle,
             near,
             &gbuffer,
             &v.slab_layers[2 * k as usize],
@@ -236,6 +242,7 @@ fn update_volume(
         );
         raster_gbuffer(
             ctx,
+            settle,
             far,
             &gbuffer,
             &v.slab_layers[2 * k as usize + 1],
@@ -270,6 +277,7 @@ fn update_volume(
             timestamp_writes: None,
         });
         let span = diagnostics.pass_span(&mut pass, prop_name);
+        settle.settle(&mut pass);
         pass.set_pipeline(propagate);
         pass.set_bind_group(0, &main, &[offset]);
         pass.dispatch_workgroups_indirect(&v.args, k as u64 * 12);
@@ -284,6 +292,7 @@ fn update_volume(
         }
         raster_gbuffer(
             ctx,
+            settle,
             near,
             &gbuffer,
             &v.cube_layers[face as usize],
@@ -311,6 +320,7 @@ fn update_volume(
         timestamp_writes: None,
     });
     let span = diagnostics.pass_span(&mut pass, PROJECT_PASS);
+    settle.settle(&mut pass);
     pass.set_pipeline(project);
     let groups = run
         .project
@@ -345,6 +355,7 @@ pub fn volume_passes(
     pipelines: Res<VolumePipelines>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
+    settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (entity, buffer, prepass, state, _) = view.into_inner();
@@ -360,7 +371,7 @@ pub fn volume_passes(
     if store.updater == Some(entity) {
         for v in &store.volumes {
             if let (Some(run), true) = (v.run, v.visible)
-                && update_volume(&mut ctx, v, run, &store, &pipelines, &cache, &log)
+                && update_volume(&mut ctx, &settle, v, run, &store, &pipelines, &cache, &log)
             {
                 v.ran.store(true, Ordering::Release);
             }
@@ -396,6 +407,7 @@ pub fn volume_passes(
             &[cleared(&state.target)],
         ));
         let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
+        settle.settle(&mut pass);
         pass.set_render_pipeline(splat);
         for (group, capacity) in &groups {
             pass.set_bind_group(0, group, &[]);
@@ -422,6 +434,7 @@ pub fn volume_passes(
             &[cleared(&buffer.view)],
         ));
         let span = diagnostics.pass_span(&mut pass, BLUR_PASS);
+        settle.settle(&mut pass);
         pass.set_render_pipeline(blur);
         pass.set_bind_group(0, &group, &[]);
         pass.draw(0..3, 0..1);
