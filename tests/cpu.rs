@@ -767,6 +767,8 @@ mod limits;
 mod photon_map;
 #[path = "cpu/reference_cache.rs"]
 mod reference_cache;
+#[path = "cpu/report.rs"]
+mod report;
 #[path = "cpu/volume.rs"]
 mod volume;
 #[path = "cpu/volume_modes.rs"]

@@ -2,6 +2,7 @@
 //! and the metrics every technique is judged by.
 
 pub mod cache;
+pub mod curve;
 pub mod image;
 pub mod metrics;
 pub mod technique;

@@ -382,11 +382,3 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
     }
     resolve_gathered(q, gather_at(q.x, q.n, q.r));
 }
-
-// One thread after the gather in the same pass: its read-write binding of the header makes
-// the pass wait for the gather before the pass's end timestamp (on lavapipe a pass whose last
-// dispatch nothing waits for reports almost no time).
-@compute @workgroup_size(1)
-fn pm_fence() {
-    atomicAdd(&header[C_FRAME], 0u);
-}

@@ -245,9 +245,3 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let slot = atomicSub(&cells[photon_cell[i]], 1u) - 1u;
     sorted[slot] = photons[i];
 }
-
-// One thread after the scatter in the same pass (see `pm_fence` in gather.wgsl).
-@compute @workgroup_size(1)
-fn grid_fence() {
-    atomicAdd(&header[H_STORED], 0u);
-}

@@ -39,13 +39,11 @@
 //! - The footprint floor of the radius (`optics::gather_radius`): on `ring` at radius 0.01,
 //!   RMSE after 64 frames 125 lx without it (the point estimate at a caustic curve's peak is
 //!   not the pixel's mean) and 78.6 lx with it.
-//! - Lavapipe's GPU timestamps do not hold this technique's compute work: on `glass_sphere`
-//!   at 2^20 photons each traced frame costs 1.9 s of wall clock more than a frozen one
-//!   (`max_frames` 1 against 1024, 4 against 12 frames), while the trace, grid and gather
-//!   spans add up to about 50 ms. The spans stay (every pass records one, and the trace pass
-//!   ends with the grid's bounds reduction and the others with a one-thread dispatch, so on a
-//!   GPU whose timestamps follow the dispatches they hold the pass's work), but the
-//!   measurements quoted for this technique are wall-clock differences per frame.
+//! - GPU spans: on lavapipe a compute pass's span only holds its work with the plugin's span
+//!   settling (`render/span.rs`). Before it, a 2^20-photon frame on `glass_sphere` cost 1.9 s of
+//!   wall clock while its spans added up to 50 ms; with it, the spans add up to 1969 ms against
+//!   1977 ms of wall clock per frame. The table below was measured by wall clock before that;
+//!   REPORT.md now times every technique by its spans.
 //!
 //! - Three quality levels (2^16, 2^18, 2^20 photons per light and frame; 128², seed 2, 12
 //!   progressive frames, `mirrors` off as the reference has none; wall-clock ms per frame, a

@@ -18,8 +18,7 @@ use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
-/// Emit and trace; photons stored at their first diffuse hit after a specular one (with the
-/// grid's bounds reduction, its first stage).
+/// Emit and trace; photons stored at their first diffuse hit after a specular one.
 pub const TRACE_PASS: &str = "caustics/photon_map/trace";
 /// Bounds, layout, count, prefix sum and scatter.
 pub const GRID_PASS: &str = "caustics/photon_map/grid";
@@ -98,10 +97,9 @@ pub fn photon_map_passes(
     let (Some(depth), Some(gbuffer)) = (prepass.depth_view(), prepass.deferred_view()) else {
         return;
     };
-    let (Some(trace), Some(gather), Some(fence)) = (
+    let (Some(trace), Some(gather)) = (
         cache.get_compute_pipeline(pipelines.trace),
         cache.get_compute_pipeline(pipelines.gather),
-        cache.get_compute_pipeline(pipelines.fence),
     ) else {
         return;
     };
@@ -167,24 +165,20 @@ pub fn photon_map_passes(
         encoder.clear_buffer(&state.header, 0, None);
         let photons = state.per_light * state.lights;
         let sizes = grid_dispatches(state.key.capacity, state.key.budget + 1);
-        let mut stages: Vec<_> = grid
+        let stages: Vec<_> = grid
             .iter()
             .zip(sizes)
             .map(|(p, n)| (*p, &grid_group, n))
             .collect();
         debug_assert_eq!(stages.len(), GRID_ENTRIES.len());
-        // The bounds reduction reads the photons, so the trace's span ends after a barrier
-        // that waits for it: on lavapipe a pass whose last dispatch nothing waits for inside
-        // it reports almost no time (its work lands between two spans).
-        let bounds = stages.remove(0);
+        encoder.clear_buffer(&state.cells, 0, None);
         compute_pass(
             &mut ctx,
             &settle,
             TRACE_PASS,
-            &[(trace, &group, photon_groups(photons)), bounds],
+            &[(trace, &group, photon_groups(photons))],
         );
         log.record(TRACE_PASS);
-        ctx.command_encoder().clear_buffer(&state.cells, 0, None);
         compute_pass(&mut ctx, &settle, GRID_PASS, &stages);
         log.record(GRID_PASS);
     }
@@ -198,10 +192,7 @@ pub fn photon_map_passes(
         &mut ctx,
         &settle,
         name,
-        &[
-            (gather, &group, [size.x.div_ceil(8), size.y.div_ceil(8), 1]),
-            (fence, &group, [1, 1, 1]),
-        ],
+        &[(gather, &group, [size.x.div_ceil(8), size.y.div_ceil(8), 1])],
     );
     log.record(name);
     let diagnostics = ctx.diagnostic_recorder();

@@ -1,6 +1,5 @@
 //! The photon map's pipelines: the tracer module (the shared tracer's WGSL, photon.wgsl,
-//! trace.wgsl, the G-buffer decoder and gather.wgsl: entry points `pm_trace`, `pm_gather` and
-//! `pm_fence`) and the grid module (photon.wgsl + grid.wgsl), queued when a camera first uses
+//! trace.wgsl, the G-buffer decoder and gather.wgsl: entry points `pm_trace` and `pm_gather`) and the grid module (photon.wgsl + grid.wgsl), queued when a camera first uses
 //! the technique.
 
 use bevy::prelude::*;
@@ -32,9 +31,8 @@ pub fn grid_source() -> String {
     [include_str!("photon.wgsl"), include_str!("grid.wgsl")].join("\n")
 }
 
-/// The grid build's entry points, in the order they run (the last one only makes the pass
-/// wait for the scatter, so its GPU span holds it).
-pub const GRID_ENTRIES: [&str; 8] = [
+/// The grid build's entry points, in the order they run.
+pub const GRID_ENTRIES: [&str; 7] = [
     "grid_bounds",
     "grid_setup",
     "grid_count",
@@ -42,13 +40,12 @@ pub const GRID_ENTRIES: [&str; 8] = [
     "grid_scan_top",
     "grid_scan_add",
     "grid_scatter",
-    "grid_fence",
 ];
 
 /// The workgroups of each [`GRID_ENTRIES`] dispatch for a photon buffer of `capacity` and a
 /// cell array of `cell_words` words (the budget + 1). Shared by the plugin and the exactness
 /// test, so both run the same build.
-pub fn grid_dispatches(capacity: u32, cell_words: u32) -> [[u32; 3]; 8] {
+pub fn grid_dispatches(capacity: u32, cell_words: u32) -> [[u32; 3]; 7] {
     let photons = photon_groups(capacity);
     let blocks = cell_words.div_ceil(SCAN_BLOCK).max(1);
     [
@@ -59,7 +56,6 @@ pub fn grid_dispatches(capacity: u32, cell_words: u32) -> [[u32; 3]; 8] {
         [1, 1, 1],
         [blocks, 1, 1],
         photons,
-        [1, 1, 1],
     ]
 }
 
@@ -83,10 +79,8 @@ pub struct PhotonMapPipelines {
     pub trace: CachedComputePipelineId,
     /// `pm_gather`.
     pub gather: CachedComputePipelineId,
-    /// `pm_fence`: the gather pass's last dispatch (see gather.wgsl).
-    pub fence: CachedComputePipelineId,
     /// The grid build, in [`GRID_ENTRIES`] order.
-    pub grid: [CachedComputePipelineId; 8],
+    pub grid: [CachedComputePipelineId; 7],
 }
 
 /// Queue the pipelines the first time a camera uses the photon map (in `PrepareResources`):
@@ -165,14 +159,12 @@ pub(super) fn queue_photon_map_pipelines(
         };
     let trace = queue("pm_trace", &layout, &shaders.compute);
     let gather = queue("pm_gather", &layout, &shaders.compute);
-    let fence = queue("pm_fence", &layout, &shaders.compute);
     let grid = GRID_ENTRIES.map(|e| queue(e, &grid_layout, &shaders.grid));
     commands.insert_resource(PhotonMapPipelines {
         layout,
         grid_layout,
         trace,
         gather,
-        fence,
         grid,
     });
 }
