@@ -185,6 +185,11 @@ pub struct RenderReport {
     pub caustics_alpha: Vec<f32>,
     /// Counters of the first visible volume (technique `volume` only).
     pub volume: Option<super::volume::VolumeCounters>,
+    /// GPU bytes each technique held at the last measured frame (`render::memory`).
+    pub gpu_bytes: BTreeMap<String, u64>,
+    /// The same at every measured frame, in order.
+    #[serde(skip)]
+    pub frame_gpu_bytes: Vec<BTreeMap<String, u64>>,
     /// The caustics passes dispatched in each measured frame.
     pub frame_passes: Vec<Vec<String>>,
 }
@@ -434,7 +439,10 @@ fn drive(
         With<MainCamera>,
     >,
     diagnostics: Res<DiagnosticsStore>,
-    log: Res<CausticsDispatchLog>,
+    (log, memory): (
+        Res<CausticsDispatchLog>,
+        Res<crate::render::memory::CausticsGpuMemory>,
+    ),
     readback: Res<crate::render::readback::CausticsReadback>,
     warnings: Res<crate::CausticsWarnings>,
     frames: Res<FrameCount>,
@@ -533,6 +541,13 @@ fn drive(
                 }
             }
             o.report.frame_passes.push(frame);
+            let bytes: BTreeMap<String, u64> = memory
+                .bytes()
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect();
+            o.report.gpu_bytes = bytes.clone();
+            o.report.frame_gpu_bytes.push(bytes);
             if job.0.every_frame && job.0.technique != CausticsTechnique::Reference {
                 while let Some(snap) = readback.poll() {
                     o.report.frame_counters.push(snap.counters.to_vec());

@@ -8,6 +8,7 @@
 pub mod aaps;
 pub mod composite;
 pub mod image_space;
+pub mod memory;
 pub mod photon_map;
 pub mod readback;
 pub mod span;
@@ -281,6 +282,7 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     }
     readback::build(app);
     span::build(app);
+    memory::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };

@@ -91,6 +91,27 @@ pub struct AapsViewState {
     pub photon_capacity: u32,
 }
 
+impl AapsViewState {
+    /// GPU bytes held (`render::memory`).
+    pub fn gpu_bytes(&self) -> u64 {
+        use crate::render::memory::{buffer_bytes, texture_bytes};
+        buffer_bytes(
+            [
+                &self.quadtree,
+                &self.accum,
+                &self.splats,
+                &self.args,
+                &self.params,
+                &self.world_from_clip,
+                &self.levels,
+            ]
+            .into_iter()
+            .chain(&self.density),
+        ) + texture_bytes(&self.history.0)
+            + self.msaa.as_ref().map_or(0, |m| texture_bytes(&m.0))
+    }
+}
+
 /// Marks a view whose AAPS passes run this frame (render world).
 #[derive(Component)]
 pub struct AapsFrame;

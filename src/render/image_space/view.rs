@@ -448,6 +448,34 @@ pub struct ImageSpaceViewState {
     pub photons: u32,
 }
 
+impl ImageSpaceViewState {
+    /// GPU bytes held (`render::memory`): every texture once (the layer views share theirs).
+    pub fn gpu_bytes(&self) -> u64 {
+        use crate::render::memory::{buffer_bytes, texture_bytes};
+        let pairs = [&self.raw, &self.aux]
+            .into_iter()
+            .chain(&self.filter)
+            .chain(&self.zn)
+            .chain(&self.history)
+            .chain(&self.moments);
+        let textures = pairs.map(|t| &*t.0).chain([&*self.rsm.0]);
+        let views = [&self.rsm_depth, &self.dummy_in]
+            .into_iter()
+            .chain(&self.dummy_out)
+            .map(|v| v.texture());
+        textures.chain(views).map(texture_bytes).sum::<u64>()
+            + buffer_bytes([
+                &self.map,
+                &self.counters,
+                &self.hiz,
+                &self.params,
+                &self.lights,
+                &self.rsm_views,
+                &self.steps,
+            ])
+    }
+}
+
 /// Marks a view whose image-space passes run this frame.
 #[derive(Component)]
 pub struct ImageSpaceFrame;

@@ -99,6 +99,24 @@ pub struct PhotonMapViewState {
     accumulating: Option<Accumulating>,
 }
 
+impl PhotonMapViewState {
+    /// GPU bytes held (`render::memory`).
+    pub fn gpu_bytes(&self) -> u64 {
+        crate::render::memory::buffer_bytes([
+            &self.params,
+            &self.grid_params,
+            &self.photons,
+            &self.sorted,
+            &self.header,
+            &self.cells,
+            &self.blocks,
+            &self.photon_cell,
+            &self.accum,
+            &self.dummy,
+        ])
+    }
+}
+
 /// On the right eye of a [`crate::CausticsStereo`] pair: the render-world view of its left
 /// eye, whose photons, grid (and, with `reuse`, gathered irradiance) it uses this frame.
 #[derive(Component, Clone, Copy, Debug)]

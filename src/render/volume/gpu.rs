@@ -57,6 +57,11 @@ pub struct VolumeScene {
 }
 
 impl VolumeScene {
+    /// GPU bytes held (`render::memory`).
+    pub fn gpu_bytes(&self) -> u64 {
+        crate::render::memory::buffer_bytes([&self.tris, &self.materials])
+    }
+
     /// Flatten every instance's triangles into world space (degenerate and non-finite
     /// triangles left out).
     pub fn build(device: &RenderDevice, scene: &CausticsScene) -> Self {
@@ -216,6 +221,29 @@ pub struct VolumeGpu {
     pub traced: u32,
     /// In some caustics camera's frustum (or culling off).
     pub visible: bool,
+}
+
+impl VolumeGpu {
+    /// GPU bytes held (`render::memory`): the buffers and the three layered textures (the layer
+    /// views share them).
+    pub fn gpu_bytes(&self) -> u64 {
+        use crate::render::memory::{buffer_bytes, texture_bytes};
+        buffer_bytes([
+            &self.params,
+            &self.probes,
+            &self.states,
+            &self.live,
+            &self.counts,
+            &self.finals,
+            &self.hits,
+            &self.tiles,
+            &self.args,
+        ]) + [&*self.slab_gbuffer, &*self.cube_gbuffer]
+            .into_iter()
+            .chain([self.slab_depth.texture(), self.cube_depth.texture()])
+            .map(texture_bytes)
+            .sum::<u64>()
+    }
 }
 
 fn storage(device: &RenderDevice, label: &'static str, size: u64, extra: BufferUsages) -> Buffer {

@@ -50,6 +50,22 @@ pub struct VolumeViewState {
     pub visible: Vec<usize>,
 }
 
+impl VolumeViewState {
+    /// GPU bytes held (`render::memory`).
+    pub fn gpu_bytes(&self) -> u64 {
+        crate::render::memory::texture_bytes(self.target.texture())
+            + crate::render::memory::buffer_bytes([&self.params, &self.blur])
+    }
+}
+
+impl VolumeStore {
+    /// GPU bytes held by every volume and the scene (`render::memory`).
+    pub fn gpu_bytes(&self) -> u64 {
+        self.volumes.iter().map(VolumeGpu::gpu_bytes).sum::<u64>()
+            + self.scene.as_ref().map_or(0, VolumeScene::gpu_bytes)
+    }
+}
+
 /// Marker: the view draws volume splats this frame.
 #[derive(Component)]
 pub struct VolumeViewFrame;
