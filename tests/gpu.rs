@@ -19,6 +19,8 @@ mod examples;
 mod first_use;
 #[path = "gpu/image_space.rs"]
 mod image_space;
+#[path = "gpu/pay_for_use.rs"]
+mod pay_for_use;
 #[path = "gpu/photon_map.rs"]
 mod photon_map;
 #[path = "gpu/twins.rs"]

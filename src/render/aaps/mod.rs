@@ -103,7 +103,10 @@ pub(crate) fn build(app: &mut App) -> bool {
         .add_systems(RenderStartup, pipelines::init_aaps_pipelines)
         .add_systems(
             Render,
-            view::prepare_aaps_views
+            (
+                view::prepare_aaps_views,
+                pipelines::queue_aaps_trace_variant,
+            )
                 .in_set(RenderSystems::PrepareResources)
                 .after(super::trace::prepare_trace_scene),
         )

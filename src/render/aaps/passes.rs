@@ -16,6 +16,7 @@ use super::pipelines::AapsPipelines;
 use super::view::{AapsFrame, AapsStereo, AapsViewState, LEVEL_STRIDE};
 use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
+use crate::render::trace::{TraceSpecialization, wanted_features};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
 /// GPU span and log names of the passes.
@@ -69,6 +70,7 @@ pub fn aaps_passes(
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     settle: Res<SpanSettle>,
+    specialization: Option<Res<TraceSpecialization>>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _, stereo) = view.into_inner();
@@ -102,6 +104,12 @@ pub fn aaps_passes(
         update,
         scale,
     ] = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| compute[i]);
+    // The scene's specialised tracer once compiled; until then the one with everything.
+    let trace = pipelines
+        .trace
+        .get(wanted_features(&scene, specialization.as_deref()))
+        .and_then(|id| cache.get_compute_pipeline(id))
+        .unwrap_or(trace);
     let (main, args, splat_group) = bind_groups(
         ctx.render_device(),
         &cache,

@@ -58,6 +58,43 @@ pub struct AapsPipelines {
     /// Small splats, 4x MSAA, per-sample shading (when the adapter can multisample and
     /// resolve `Rgba32Float`).
     pub splat_msaa: Option<CachedRenderPipelineId>,
+    /// `trace` specialised by the scene's features (`render::trace`); `compute[3]` is the
+    /// variant with everything, used until the scene's own is compiled.
+    pub trace: crate::render::trace::TraceVariants,
+}
+
+/// The `trace` pipeline for `features`.
+pub fn trace_descriptor(
+    layout: &BindGroupLayoutDescriptor,
+    shader: &Handle<Shader>,
+    shader_defs: Vec<bevy::shader::ShaderDefVal>,
+) -> ComputePipelineDescriptor {
+    ComputePipelineDescriptor {
+        label: Some("caustics:pipeline:aaps_trace".into()),
+        layout: vec![layout.clone()],
+        shader: shader.clone(),
+        shader_defs,
+        entry_point: Some("trace".into()),
+        ..default()
+    }
+}
+
+/// Queue the `trace` variant the uploaded scene needs (in `PrepareResources`).
+pub(super) fn queue_aaps_trace_variant(
+    mut pipelines: ResMut<AapsPipelines>,
+    shaders: Res<AapsShaders>,
+    cache: Res<PipelineCache>,
+    scene: Option<Res<crate::render::trace::scene::TraceSceneBuffers>>,
+    specialization: Option<Res<crate::render::trace::TraceSpecialization>>,
+) {
+    let Some(scene) = scene else {
+        return;
+    };
+    let features = crate::render::trace::wanted_features(&scene, specialization.as_deref());
+    let layout = pipelines.compute_layout.clone();
+    pipelines.trace.get_or_queue(features, &cache, |defs| {
+        trace_descriptor(&layout, &shaders.compute, defs)
+    });
 }
 
 /// Entry points of [`AapsPipelines::compute`], in order.
@@ -123,7 +160,15 @@ pub(super) fn init_aaps_pipelines(
             ),
         ),
     );
+    let all = crate::render::trace::TraceFeatures::ALL;
     let compute = COMPUTE_ENTRIES.map(|entry| {
+        if entry == "trace" {
+            return cache.queue_compute_pipeline(trace_descriptor(
+                &compute_layout,
+                &shaders.compute,
+                all.shader_defs(),
+            ));
+        }
         let mut layout = vec![compute_layout.clone()];
         if entry.starts_with("write_") {
             layout.push(args_layout.clone());
@@ -179,6 +224,8 @@ pub(super) fn init_aaps_pipelines(
             4,
         )
     });
+    let mut trace = crate::render::trace::TraceVariants::default();
+    trace.insert(all, compute[3]);
     commands.insert_resource(AapsPipelines {
         compute_layout,
         args_layout,
@@ -186,5 +233,6 @@ pub(super) fn init_aaps_pipelines(
         compute,
         splat,
         splat_msaa,
+        trace,
     });
 }

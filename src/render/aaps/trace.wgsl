@@ -164,10 +164,12 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
         if (*path).bounces == 0u {
             accum_add_f32(C_FLUX_CASTER + slot4, luminance((*path).flux));
         }
+#ifdef TRACE_DIELECTRICS
         if (*path).medium != INVALID {
             let mm = materials[3u * (*path).medium];
             (*path).flux *= optics_beer_lambert(materials[3u * (*path).medium + 1u].xyz, mm.w, hit.t);
         }
+#endif
         let sh = surface_hit(hit, (*path).o, (*path).d);
         if !sh.ok {
             atomicAdd(&accum[C_NAN], 1u);
@@ -209,6 +211,7 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             (*path).o = optics_offset_ray_origin(pos, ng_f, scale);
             continue;
         }
+#ifdef TRACE_DIELECTRICS
         // Dielectric.
         let ior = max(m0.y, 1.0);
         let thin = m0.z > 0.5;
@@ -258,6 +261,10 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             (*path).dv = reflect_guarded((*path).dv, nv, ng_f);
             (*path).o = optics_offset_ray_origin(pos, ng_f, scale);
         }
+#else
+        // A scene without dielectrics has no other specular kind.
+        return;
+#endif
     }
 }
 

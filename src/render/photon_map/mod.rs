@@ -107,6 +107,7 @@ pub(crate) fn build(app: &mut App) {
             Render,
             (
                 pipelines::queue_photon_map_pipelines,
+                pipelines::queue_photon_map_trace_variant,
                 view::prepare_photon_map_views,
             )
                 .chain()

@@ -16,6 +16,7 @@ use super::view::{PhotonMapFrame, PhotonMapStereo, PhotonMapViewState};
 use crate::render::photon_groups;
 use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
+use crate::render::trace::{TraceSpecialization, wanted_features};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
 /// Emit and trace; photons stored at their first diffuse hit after a specular one.
@@ -82,6 +83,7 @@ pub fn photon_map_passes(
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     settle: Res<SpanSettle>,
+    specialization: Option<Res<TraceSpecialization>>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _, stereo) = view.into_inner();
@@ -97,8 +99,12 @@ pub fn photon_map_passes(
     let (Some(depth), Some(gbuffer)) = (prepass.depth_view(), prepass.deferred_view()) else {
         return;
     };
+    let features = wanted_features(&scene, specialization.as_deref());
     let (Some(trace), Some(gather)) = (
-        cache.get_compute_pipeline(pipelines.trace),
+        pipelines
+            .trace
+            .get(features)
+            .and_then(|id| cache.get_compute_pipeline(id)),
         cache.get_compute_pipeline(pipelines.gather),
     ) else {
         return;

@@ -75,8 +75,9 @@ pub struct PhotonMapPipelines {
     pub layout: BindGroupLayoutDescriptor,
     /// Group 0 of the grid build.
     pub grid_layout: BindGroupLayoutDescriptor,
-    /// `pm_trace`.
-    pub trace: CachedComputePipelineId,
+    /// `pm_trace`, specialised by the scene's features (`render::trace`), queued by
+    /// [`queue_photon_map_trace_variant`].
+    pub trace: crate::render::trace::TraceVariants,
     /// `pm_gather`.
     pub gather: CachedComputePipelineId,
     /// The grid build, in [`GRID_ENTRIES`] order.
@@ -157,14 +158,38 @@ pub(super) fn queue_photon_map_pipelines(
                 ..default()
             })
         };
-    let trace = queue("pm_trace", &layout, &shaders.compute);
     let gather = queue("pm_gather", &layout, &shaders.compute);
     let grid = GRID_ENTRIES.map(|e| queue(e, &grid_layout, &shaders.grid));
     commands.insert_resource(PhotonMapPipelines {
         layout,
         grid_layout,
-        trace,
+        trace: Default::default(),
         gather,
         grid,
     });
+}
+
+/// Queue the `pm_trace` variant the uploaded scene needs (in `PrepareResources`).
+pub(super) fn queue_photon_map_trace_variant(
+    pipelines: Option<ResMut<PhotonMapPipelines>>,
+    shaders: Res<PhotonMapShaders>,
+    cache: Res<PipelineCache>,
+    scene: Option<Res<crate::render::trace::scene::TraceSceneBuffers>>,
+    specialization: Option<Res<crate::render::trace::TraceSpecialization>>,
+) {
+    let (Some(mut pipelines), Some(scene)) = (pipelines, scene) else {
+        return;
+    };
+    let features = crate::render::trace::wanted_features(&scene, specialization.as_deref());
+    let layout = pipelines.layout.clone();
+    pipelines
+        .trace
+        .get_or_queue(features, &cache, |shader_defs| ComputePipelineDescriptor {
+            label: Some("caustics:pipeline:photon_map_pm_trace".into()),
+            layout: vec![layout],
+            shader: shaders.compute.clone(),
+            shader_defs,
+            entry_point: Some("pm_trace".into()),
+            ..default()
+        });
 }

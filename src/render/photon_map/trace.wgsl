@@ -81,10 +81,12 @@ fn trace_photon(i: u32) -> PathEnd {
             }
             break;
         }
+#ifdef TRACE_DIELECTRICS
         if medium != INVALID {
             let mm = materials[3u * medium];
             flux *= optics_beer_lambert(materials[3u * medium + 1u].xyz, mm.w, hit.t);
         }
+#endif
         let s = surface_hit(hit, o, d);
         if !s.ok || !finite3(flux) {
             end.counts |= END_NAN;
@@ -113,6 +115,7 @@ fn trace_photon(i: u32) -> PathEnd {
             o = optics_offset_ray_origin(s.pos, s.ng_f, scale);
             continue;
         }
+#ifdef TRACE_DIELECTRICS
         // Dielectric: reflect with the Fresnel probability (unbiased, flux unchanged).
         let m0 = materials[3u * hit.instance];
         let thin = m0.z > 0.5;
@@ -138,6 +141,10 @@ fn trace_photon(i: u32) -> PathEnd {
             d = reflect_guarded(d, s.ns_f, s.ng_f);
             o = optics_offset_ray_origin(s.pos, s.ng_f, scale);
         }
+#else
+        // A scene without dielectrics has no other specular kind.
+        break;
+#endif
     }
     end.counts |= min(tir, 0xffffffu) << 8u;
     return end;

@@ -6,12 +6,25 @@
 //!
 //! Render world only. The scene is uploaded once per scene generation while a camera uses a
 //! BVH technique and dropped when none does.
+//!
+//! **Specialised tracers.** The trace pipelines are compiled for what the scene holds
+//! ([`TraceFeatures`]): without a dielectric, the refraction, Fresnel split and Beer-Lambert
+//! code is left out (shader def `TRACE_DIELECTRICS`); without a point or spot light, the
+//! equal-area emission (`TRACE_POINT_LIGHTS`). A variant is queued the first time a scene needs
+//! it ([`TraceVariants`]). [`TraceSpecialization`] (main world, default on) turns it off, so
+//! every scene uses the variant with everything.
 
 pub mod scene;
 
+use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
+use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
+use bevy::render::render_resource::{
+    CachedComputePipelineId, ComputePipelineDescriptor, PipelineCache,
+};
 use bevy::render::renderer::RenderDevice;
 use bevy::render::{ExtractSchedule, MainWorld, Render, RenderApp, RenderSystems};
+use bevy::shader::ShaderDefVal;
 
 use crate::CausticsTechnique;
 use crate::render::ExtractedCaustics;
@@ -27,6 +40,89 @@ pub fn tracer_source() -> String {
         include_str!("surface.wgsl"),
     ]
     .join("\n")
+}
+
+/// What a scene holds that the tracer's code depends on (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct TraceFeatures {
+    /// Some caster is a dielectric: refraction, the Fresnel split, Beer-Lambert.
+    pub dielectrics: bool,
+    /// Some caustic light is a point or spot light: equal-area emission over the sphere.
+    pub point_lights: bool,
+}
+
+impl TraceFeatures {
+    /// Everything (the unspecialised tracer).
+    pub const ALL: Self = Self {
+        dielectrics: true,
+        point_lights: true,
+    };
+
+    /// The shader defs of this variant.
+    pub fn shader_defs(self) -> Vec<ShaderDefVal> {
+        let mut defs = Vec::new();
+        if self.dielectrics {
+            defs.push("TRACE_DIELECTRICS".into());
+        }
+        if self.point_lights {
+            defs.push("TRACE_POINT_LIGHTS".into());
+        }
+        defs
+    }
+}
+
+/// Whether trace pipelines are specialised by the scene's [`TraceFeatures`] (main world;
+/// default on). Off, every scene uses the tracer with everything: for measuring what
+/// specialisation saves, and as an escape hatch.
+#[derive(Resource, ExtractResource, Clone, Copy, Debug, Reflect)]
+#[reflect(Resource, Clone)]
+pub struct TraceSpecialization(pub bool);
+
+impl Default for TraceSpecialization {
+    fn default() -> Self {
+        Self(true)
+    }
+}
+
+/// The trace pipelines of one entry point, one per [`TraceFeatures`] variant a scene needed.
+#[derive(Default)]
+pub struct TraceVariants(HashMap<TraceFeatures, CachedComputePipelineId>);
+
+impl TraceVariants {
+    /// The pipeline for `features`, queued with `descriptor(shader defs)` the first time.
+    pub fn get_or_queue(
+        &mut self,
+        features: TraceFeatures,
+        cache: &PipelineCache,
+        descriptor: impl FnOnce(Vec<ShaderDefVal>) -> ComputePipelineDescriptor,
+    ) -> CachedComputePipelineId {
+        *self
+            .0
+            .entry(features)
+            .or_insert_with(|| cache.queue_compute_pipeline(descriptor(features.shader_defs())))
+    }
+
+    /// Record an already queued pipeline for `features`.
+    pub fn insert(&mut self, features: TraceFeatures, id: CachedComputePipelineId) {
+        self.0.insert(features, id);
+    }
+
+    /// The pipeline for `features`, if queued.
+    pub fn get(&self, features: TraceFeatures) -> Option<CachedComputePipelineId> {
+        self.0.get(&features).copied()
+    }
+}
+
+/// The variant the uploaded scene needs (everything when specialisation is off).
+pub fn wanted_features(
+    scene: &TraceSceneBuffers,
+    specialization: Option<&TraceSpecialization>,
+) -> TraceFeatures {
+    if specialization.is_some_and(|s| !s.0) {
+        TraceFeatures::ALL
+    } else {
+        scene.features
+    }
 }
 
 /// Whether a camera with `technique` traces photons through the BVH.
@@ -90,6 +186,9 @@ pub fn prepare_trace_scene(
 
 /// Render-app part: the scene's extraction (used by every GPU technique) and upload.
 pub(crate) fn build(app: &mut App) {
+    app.init_resource::<TraceSpecialization>()
+        .register_type::<TraceSpecialization>()
+        .add_plugins(ExtractResourcePlugin::<TraceSpecialization>::default());
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };

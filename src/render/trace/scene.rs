@@ -182,6 +182,8 @@ pub struct TraceSceneBuffers {
     pub casters: (Vec3, f32),
     /// Whether any instance is a mirror (a conductor): cameras may see caustics in it.
     pub has_mirrors: bool,
+    /// What the tracer must handle (its pipelines' variant).
+    pub features: super::TraceFeatures,
 }
 
 /// The render world's copy of the gathered scene.
@@ -256,6 +258,14 @@ impl TraceSceneBuffers {
                 .instances
                 .iter()
                 .any(|i| matches!(i.surface, crate::scene::Surface::Conductor { .. })),
+            features: super::TraceFeatures {
+                dielectrics: scene
+                    .tlas
+                    .instances
+                    .iter()
+                    .any(|i| matches!(i.surface, crate::scene::Surface::Dielectric { .. })),
+                point_lights: lights.iter().any(|(_, l)| l.kind != 0),
+            },
         })
     }
 }

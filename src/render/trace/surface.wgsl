@@ -118,12 +118,15 @@ fn light_emit(light: GpuLight, uv: vec2<f32>) -> Emission {
     if kind == LIGHT_DIRECTIONAL {
         e.o = light.position.xyz + uv.x * light.side_u.xyz + uv.y * light.side_v.xyz;
         e.d = light.axis.xyz;
-    } else {
+    }
+#ifdef TRACE_POINT_LIGHTS
+    else {
         e.o = light.position.xyz;
         e.d = optics_equal_area_square_to_sphere(uv);
         if kind == LIGHT_SPOT {
             e.weight = optics_spot_attenuation(dot(e.d, light.axis.xyz), light.side_u.w, light.axis.w);
         }
     }
+#endif
     return e;
 }
