@@ -1,5 +1,6 @@
 //! Criterion benchmarks: the optics core, BVH build and traversal, the reference tracer
-//! (photons per second), the main-world CPU cost of a frame for 1, 10 and 100 casters, and the
+//! (photons per second), the main-world CPU cost of a frame for 1, 10 and 100 casters of which
+//! one moves and for 1, 100 and 1000 still ones (against the same app without the plugin), the
 //! photon map's CPU baselines (seed 001 tables 1 and 2: a kd-tree against the hash grid, a
 //! k-nearest max-heap against all photons within the radius).
 //!
@@ -100,46 +101,76 @@ fn bench_tracer(c: &mut Criterion) {
     g.finish();
 }
 
+/// An app with the plugin's main world (no renderer) and `n` glass casters in a row, a sun and
+/// a still caustics camera, after its first frame; or the same without the plugin (the
+/// baseline of Bevy's own frame). Returns the app and the first caster.
+fn frame_app(n: usize, plugin: bool) -> (App, Entity) {
+    let mut app = App::new();
+    // One thread and single-threaded schedules: on 2 cores the multi-threaded executor's
+    // wake-ups cost about 270 µs a frame and vary by tens of µs, more than the plugin's
+    // systems.
+    app.add_plugins((
+        MinimalPlugins.set(TaskPoolPlugin {
+            task_pool_options: TaskPoolOptions::with_num_threads(1),
+        }),
+        AssetPlugin::default(),
+        bevy::transform::TransformPlugin,
+    ))
+    .init_asset::<Mesh>()
+    .init_asset::<StandardMaterial>();
+    if plugin {
+        app.add_plugins(bevy_caustics::CausticsPlugin);
+    }
+    app.finish();
+    app.cleanup();
+    let single = |s: &mut bevy::ecs::schedule::Schedule| {
+        s.set_executor(bevy::ecs::schedule::SingleThreadedExecutor::new());
+    };
+    app.edit_schedule(First, single)
+        .edit_schedule(PreUpdate, single)
+        .edit_schedule(Update, single)
+        .edit_schedule(PostUpdate, single)
+        .edit_schedule(Last, single);
+    let w = app.world_mut();
+    let mesh = w
+        .resource_mut::<Assets<Mesh>>()
+        .add(Sphere::new(0.5).mesh().uv(32, 16));
+    let mat = w
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial {
+            specular_transmission: 1.0,
+            ..default()
+        });
+    let first = (0..n)
+        .map(|i| {
+            w.spawn((
+                Mesh3d(mesh.clone()),
+                MeshMaterial3d(mat.clone()),
+                Transform::from_xyz(i as f32, 1.0, 0.0),
+            ))
+            .id()
+        })
+        .collect::<Vec<_>>()[0];
+    w.spawn((
+        DirectionalLight::default(),
+        bevy_caustics::CausticLight::default(),
+    ));
+    if plugin {
+        w.spawn((
+            bevy_caustics::Caustics::default(),
+            Transform::from_xyz(0.0, 3.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
+        ));
+    }
+    app.update();
+    app.update();
+    (app, first)
+}
+
 /// Main-world CPU cost of one frame (validation + gathering) when one of N casters moves.
 fn bench_frame_cpu(c: &mut Criterion) {
     let mut g = c.benchmark_group("frame_cpu_reference");
     for n in [1usize, 10, 100] {
-        let mut app = App::new();
-        app.add_plugins((
-            MinimalPlugins,
-            AssetPlugin::default(),
-            bevy::transform::TransformPlugin,
-        ))
-        .init_asset::<Mesh>()
-        .init_asset::<StandardMaterial>()
-        .add_plugins(bevy_caustics::CausticsPlugin);
-        app.finish();
-        app.cleanup();
-        let w = app.world_mut();
-        let mesh = w
-            .resource_mut::<Assets<Mesh>>()
-            .add(Sphere::new(0.5).mesh().uv(32, 16));
-        let mat = w
-            .resource_mut::<Assets<StandardMaterial>>()
-            .add(StandardMaterial {
-                specular_transmission: 1.0,
-                ..default()
-            });
-        let first = (0..n)
-            .map(|i| {
-                w.spawn((
-                    Mesh3d(mesh.clone()),
-                    MeshMaterial3d(mat.clone()),
-                    Transform::from_xyz(i as f32, 1.0, 0.0),
-                ))
-                .id()
-            })
-            .collect::<Vec<_>>()[0];
-        w.spawn((
-            DirectionalLight::default(),
-            bevy_caustics::CausticLight::default(),
-        ));
-        app.update();
+        let (mut app, first) = frame_app(n, true);
         let mut k = 0.0f32;
         g.bench_function(format!("{n}_casters_one_moves"), |b| {
             b.iter_batched(
@@ -155,6 +186,28 @@ fn bench_frame_cpu(c: &mut Criterion) {
             )
         });
         assert_eq!(app.world().resource::<CausticsScene>().casters, n);
+    }
+    g.finish();
+}
+
+/// Main-world CPU cost of a frame in which nothing changed (issue 16 item 4: targets 20, 50 and
+/// 200 µs for 1, 100 and 1000 static casters and a still camera), with the same app without
+/// the plugin as the baseline: the plugin's cost is the difference.
+fn bench_frame_cpu_static(c: &mut Criterion) {
+    let mut g = c.benchmark_group("frame_cpu_static");
+    for n in [1usize, 100, 1000] {
+        for plugin in [true, false] {
+            let (mut app, _) = frame_app(n, plugin);
+            let name = if plugin {
+                format!("{n}_casters_still")
+            } else {
+                format!("{n}_casters_still_without_plugin")
+            };
+            g.bench_function(name, |b| b.iter(|| app.update()));
+            if plugin {
+                assert_eq!(app.world().resource::<CausticsScene>().casters, n);
+            }
+        }
     }
     g.finish();
 }
@@ -324,6 +377,7 @@ criterion_group!(
     bench_bvh,
     bench_tracer,
     bench_frame_cpu,
+    bench_frame_cpu_static,
     bench_photon_map_table1,
     bench_photon_map_table2
 );
