@@ -98,18 +98,19 @@ pub fn aaps_passes(
         leaves,
         reduce,
         trace_args,
-        trace,
         draw_args,
         variance,
         update,
         scale,
-    ] = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| compute[i]);
-    // The scene's specialised tracer once compiled; until then the one with everything.
-    let trace = pipelines
+    ] = [0, 1, 2, 3, 4, 5, 6].map(|i| compute[i]);
+    // The scene's specialised tracer (none this frame while it compiles).
+    let Some(trace) = pipelines
         .trace
         .get(wanted_features(&scene, specialization.as_deref()))
         .and_then(|id| cache.get_compute_pipeline(id))
-        .unwrap_or(trace);
+    else {
+        return;
+    };
     let (main, args, splat_group) = bind_groups(
         ctx.render_device(),
         &cache,
@@ -151,26 +152,7 @@ pub fn aaps_passes(
         return;
     }
 
-    // Last frame's result becomes the history of the variance pass.
-    ctx.command_encoder().copy_texture_to_texture(
-        TexelCopyTextureInfo {
-            texture: &buffer.texture,
-            mip_level: 0,
-            origin: Default::default(),
-            aspect: Default::default(),
-        },
-        TexelCopyTextureInfo {
-            texture: &state.history.0,
-            mip_level: 0,
-            origin: Default::default(),
-            aspect: Default::default(),
-        },
-        Extent3d {
-            width: buffer.size.x,
-            height: buffer.size.y,
-            depth_or_array_layers: 1,
-        },
-    );
+    copy_to_history(&mut ctx, buffer, state);
     ctx.command_encoder().clear_buffer(&state.accum, 0, None);
 
     // Task buffer: quadtree leaves from the density atlas, reduction to the root, and the
@@ -324,6 +306,29 @@ fn bind_groups(
         )),
     );
     (main, args, splat_group)
+}
+
+/// Last frame's result becomes the history of the variance pass.
+fn copy_to_history(ctx: &mut RenderContext, buffer: &ViewCausticsBuffer, state: &AapsViewState) {
+    ctx.command_encoder().copy_texture_to_texture(
+        TexelCopyTextureInfo {
+            texture: &buffer.texture,
+            mip_level: 0,
+            origin: Default::default(),
+            aspect: Default::default(),
+        },
+        TexelCopyTextureInfo {
+            texture: &state.history.0,
+            mip_level: 0,
+            origin: Default::default(),
+            aspect: Default::default(),
+        },
+        Extent3d {
+            width: buffer.size.x,
+            height: buffer.size.y,
+            depth_or_array_layers: 1,
+        },
+    );
 }
 
 /// The splat passes: small splats into the MSAA target resolved into the caustics buffer

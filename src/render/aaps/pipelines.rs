@@ -50,16 +50,16 @@ pub struct AapsPipelines {
     pub args_layout: BindGroupLayoutDescriptor,
     /// Group 0 of the splat passes.
     pub splat_layout: BindGroupLayoutDescriptor,
-    /// `qt_leaves`, `qt_reduce`, `write_trace_args`, `trace`, `write_draw_args`, `variance`,
-    /// `density_update`, `density_scale`.
-    pub compute: [CachedComputePipelineId; 8],
+    /// [`COMPUTE_ENTRIES`], in order.
+    pub compute: [CachedComputePipelineId; 7],
     /// Plain splats.
     pub splat: CachedRenderPipelineId,
     /// Small splats, 4x MSAA, per-sample shading (when the adapter can multisample and
     /// resolve `Rgba32Float`).
     pub splat_msaa: Option<CachedRenderPipelineId>,
-    /// `trace` specialised by the scene's features (`render::trace`); `compute[3]` is the
-    /// variant with everything, used until the scene's own is compiled.
+    /// `trace`, specialised by the scene's features (`render::trace`), queued by
+    /// [`queue_aaps_trace_variant`] the first time a scene needs the variant (no frame traces
+    /// before it is compiled).
     pub trace: crate::render::trace::TraceVariants,
 }
 
@@ -98,11 +98,10 @@ pub(super) fn queue_aaps_trace_variant(
 }
 
 /// Entry points of [`AapsPipelines::compute`], in order.
-pub const COMPUTE_ENTRIES: [&str; 8] = [
+pub const COMPUTE_ENTRIES: [&str; 7] = [
     "qt_leaves",
     "qt_reduce",
     "write_trace_args",
-    "trace",
     "write_draw_args",
     "variance",
     "density_update",
@@ -160,15 +159,7 @@ pub(super) fn init_aaps_pipelines(
             ),
         ),
     );
-    let all = crate::render::trace::TraceFeatures::ALL;
     let compute = COMPUTE_ENTRIES.map(|entry| {
-        if entry == "trace" {
-            return cache.queue_compute_pipeline(trace_descriptor(
-                &compute_layout,
-                &shaders.compute,
-                all.shader_defs(),
-            ));
-        }
         let mut layout = vec![compute_layout.clone()];
         if entry.starts_with("write_") {
             layout.push(args_layout.clone());
@@ -224,8 +215,6 @@ pub(super) fn init_aaps_pipelines(
             4,
         )
     });
-    let mut trace = crate::render::trace::TraceVariants::default();
-    trace.insert(all, compute[3]);
     commands.insert_resource(AapsPipelines {
         compute_layout,
         args_layout,
@@ -233,6 +222,6 @@ pub(super) fn init_aaps_pipelines(
         compute,
         splat,
         splat_msaa,
-        trace,
+        trace: Default::default(),
     });
 }

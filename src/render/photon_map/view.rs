@@ -182,24 +182,6 @@ impl PhotonMapViewState {
             accumulating: None,
         }
     }
-
-    /// GPU bytes this view's photon map holds.
-    pub fn bytes(&self) -> u64 {
-        [
-            &self.params,
-            &self.grid_params,
-            &self.photons,
-            &self.sorted,
-            &self.header,
-            &self.cells,
-            &self.blocks,
-            &self.photon_cell,
-            &self.accum,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum()
-    }
 }
 
 /// The first frame's gather radius (and the grid's cell size) for `settings` in a scene whose

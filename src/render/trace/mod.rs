@@ -102,11 +102,6 @@ impl TraceVariants {
             .or_insert_with(|| cache.queue_compute_pipeline(descriptor(features.shader_defs())))
     }
 
-    /// Record an already queued pipeline for `features`.
-    pub fn insert(&mut self, features: TraceFeatures, id: CachedComputePipelineId) {
-        self.0.insert(features, id);
-    }
-
     /// The pipeline for `features`, if queued.
     pub fn get(&self, features: TraceFeatures) -> Option<CachedComputePipelineId> {
         self.0.get(&features).copied()
