@@ -6,7 +6,7 @@
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
 //!     [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]
-//!     [--stereo METRES]
+//!     [--stereo METRES] [--webgpu-limits]
 //! ```
 //!
 //! The scene path is relative to the working directory (its buffers and images to the glTF's
@@ -220,6 +220,12 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
             "--out-png" => out.png = Some(path(v)?),
             "--json" => out.json = Some(path(v)?),
             "--compare" => out.compare = Some(path(v)?),
+            "--webgpu-limits" => {
+                // The device gets WebGPU's default limits instead of the adapter's.
+                job.webgpu_limits = true;
+                i += 1;
+                continue;
+            }
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s => {
                 if scene.replace(PathBuf::from(s)).is_some() {
@@ -231,7 +237,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES] [--webgpu-limits]")?;
     Ok((job, out))
 }
 
@@ -260,7 +266,11 @@ fn real_main(args: &[String]) -> Result<(), String> {
     }
     find_adapter()?;
     // Every size against this adapter's maxima before anything is allocated.
-    let limits = adapter_limits()?;
+    let limits = if job.webgpu_limits {
+        bevy_caustics::limits::CausticsLimits::default()
+    } else {
+        adapter_limits()?
+    };
     check_job(&job, &limits)?;
     let mut job = job;
     job.limits = Some(limits);

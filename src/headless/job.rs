@@ -92,6 +92,13 @@ pub struct RenderJob {
     /// Technique `volume`: the settings of the volumes fitted around the casters (one per
     /// light) when the scene declares none; its box and faces are ignored.
     pub volume: crate::CausticsVolume,
+    /// Start the renderer with WebGPU's default limits (`WgpuLimits::default()`: 8 storage
+    /// buffers and 4 storage textures per stage, 128 MiB bindings) instead of the adapter's
+    /// own. Default false.
+    pub webgpu_limits: bool,
+    /// Adapter features to leave off the device (tests force the techniques' fallbacks with
+    /// `FLOAT32_BLENDABLE` and `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`). Default empty.
+    pub disabled_features: bevy::render::settings::WgpuFeatures,
 }
 
 impl Default for RenderJob {
@@ -120,6 +127,8 @@ impl Default for RenderJob {
             stereo: None,
             every_frame: false,
             volume: Default::default(),
+            webgpu_limits: false,
+            disabled_features: bevy::render::settings::WgpuFeatures::empty(),
         }
     }
 }
@@ -285,7 +294,16 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         file_path: dir.to_string_lossy().into_owned(),
         ..default()
     };
+    let mut wgpu = bevy::render::settings::WgpuSettings::default();
+    if job.webgpu_limits {
+        wgpu.constrained_limits = Some(bevy::render::settings::WgpuLimits::default());
+    }
+    if !job.disabled_features.is_empty() {
+        wgpu.disabled_features = Some(job.disabled_features);
+        wgpu.features.remove(job.disabled_features);
+    }
     let render = RenderPlugin {
+        render_creation: wgpu.into(),
         synchronous_pipeline_compilation: true,
         ..default()
     };

@@ -4,13 +4,19 @@
 // Conventions: rays are world space with a unit direction; t is the world distance. Instances
 // transform the ray into object space without renormalising, so t stays the world distance.
 // Triangles use the same Möller-Trumbore test and the same relative determinant epsilon as the
-// CPU (`intersect_triangle`). The bindings below are group 0, bindings 0 to 4.
+// CPU (`intersect_triangle`). The bindings below are group 0, bindings 0 to 2: the scene
+// packed into three buffers (`GpuBvh::packed`, src/scene/gpu.rs), so a tracer fits WebGPU's
+// default 8 storage buffers per stage.
+//
+// bvh_nodes: header vec4<u32>(TLAS nodes, first prim vec4, first BLAS node vec4, 0), the TLAS
+//   nodes (two vec4 each), the TLAS prims (four u32 per vec4), the BLAS nodes.
+// bvh_triangles: six vec4 per triangle (BVH order): (v0, index in mesh), e1, e2, and the three
+//   vertex normals (object space).
+// bvh_instances: the world-to-object rows, the BLAS root and the three material rows.
 
 @group(0) @binding(0) var<storage, read> bvh_nodes: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read> bvh_triangles: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> bvh_instances: array<BvhInstance>;
-@group(0) @binding(3) var<storage, read> tlas_nodes: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> tlas_prims: array<u32>;
 
 struct BvhInstance {
     row0: vec4<f32>,
@@ -20,7 +26,16 @@ struct BvhInstance {
     pad0: u32,
     pad1: u32,
     pad2: u32,
+    // (kind, ior, thin, attenuation distance), (attenuation colour, 0), (albedo or f0, 0).
+    mat: array<vec4<f32>, 3>,
 }
+
+// Row `k` (0 to 2) of triangle `slot`'s corners and edges, (v0, e1, e2).
+fn bvh_tri(slot: u32, k: u32) -> vec4<f32> { return bvh_triangles[6u * slot + k]; }
+// Vertex normal `k` (0 to 2) of triangle `slot`, object space.
+fn bvh_normal(slot: u32, k: u32) -> vec4<f32> { return bvh_triangles[6u * slot + 3u + k]; }
+// Material row `k` (0 to 2) of instance `i`.
+fn scene_material(i: u32, k: u32) -> vec4<f32> { return bvh_instances[i].mat[k]; }
 
 struct BvhHit {
     t: f32,
@@ -81,8 +96,7 @@ fn bvh_triangle(o: vec3<f32>, d: vec3<f32>, v0: vec3<f32>, e1: vec3<f32>, e2: ve
     return miss;
 }
 
-fn bvh_node_lo(i: u32) -> vec4<f32> { return bvh_nodes[2u * i]; }
-fn bvh_node_hi(i: u32) -> vec4<f32> { return bvh_nodes[2u * i + 1u]; }
+fn bvh_header() -> vec4<u32> { return bitcast<vec4<u32>>(bvh_nodes[0]); }
 
 // Shared by both levels: test a node `(lo, hi)` and return (prim_count, first_index), or
 // (BVH_INVALID, 0) when the ray misses its box within [tmin, tmax].
@@ -103,24 +117,28 @@ fn bvh_push_children(stack: ptr<function, array<u32, BVH_STACK>>, sp: ptr<functi
 }
 
 // Closest hit inside one instance's BLAS; updates `best` when closer.
-fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, best: ptr<function, BvhHit>) {
-    let inst = bvh_instances[inst_index];
-    if inst.root == BVH_INVALID {
+// `base` is the first BLAS node's vec4 (the header's z).
+fn bvh_blas(inst_index: u32, base: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, best: ptr<function, BvhHit>) {
+    let root = bvh_instances[inst_index].root;
+    if root == BVH_INVALID {
         return;
     }
+    let row0 = bvh_instances[inst_index].row0;
+    let row1 = bvh_instances[inst_index].row1;
+    let row2 = bvh_instances[inst_index].row2;
     let p = vec4(o_world, 1.0);
     let v = vec4(d_world, 0.0);
-    let o = vec3(dot(inst.row0, p), dot(inst.row1, p), dot(inst.row2, p));
-    let d = vec3(dot(inst.row0, v), dot(inst.row1, v), dot(inst.row2, v));
+    let o = vec3(dot(row0, p), dot(row1, p), dot(row2, p));
+    let d = vec3(dot(row0, v), dot(row1, v), dot(row2, v));
     let inv = bvh_inv_dir(d);
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
-    stack[0] = inst.root;
+    stack[0] = root;
     sp = 1u;
     while sp > 0u {
         sp -= 1u;
         let n = stack[sp];
-        let v = bvh_visit(bvh_node_lo(n), bvh_node_hi(n), o, inv, tmin, (*best).t);
+        let v = bvh_visit(bvh_nodes[base + 2u * n], bvh_nodes[base + 2u * n + 1u], o, inv, tmin, (*best).t);
         let count = v.x;
         let first = v.y;
         if count == BVH_INVALID {
@@ -132,9 +150,9 @@ fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, 
         }
         for (var k = 0u; k < count; k += 1u) {
             let tri = first + k;
-            let a = bvh_triangles[3u * tri];
-            let e1 = bvh_triangles[3u * tri + 1u].xyz;
-            let e2 = bvh_triangles[3u * tri + 2u].xyz;
+            let a = bvh_tri(tri, 0u);
+            let e1 = bvh_tri(tri, 1u).xyz;
+            let e2 = bvh_tri(tri, 2u).xyz;
             let h = bvh_triangle(o, d, a.xyz, e1, e2, tmin, (*best).t);
             if h.x < (*best).t {
                 (*best).t = h.x;
@@ -150,7 +168,8 @@ fn bvh_blas(inst_index: u32, o_world: vec3<f32>, d_world: vec3<f32>, tmin: f32, 
 // Closest hit along the world ray (o, d) in (tmin, tmax).
 fn bvh_closest_hit(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> BvhHit {
     var best = BvhHit(tmax, BVH_INVALID, 0u, vec2(0.0), 0u);
-    if arrayLength(&tlas_nodes) < 2u {
+    let header = bvh_header();
+    if header.x == 0u {
         return best;
     }
     let inv = bvh_inv_dir(d);
@@ -160,7 +179,7 @@ fn bvh_closest_hit(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> BvhHit {
     while sp > 0u {
         sp -= 1u;
         let n = stack[sp];
-        let v = bvh_visit(tlas_nodes[2u * n], tlas_nodes[2u * n + 1u], o, inv, tmin, best.t);
+        let v = bvh_visit(bvh_nodes[1u + 2u * n], bvh_nodes[2u + 2u * n], o, inv, tmin, best.t);
         let count = v.x;
         let first = v.y;
         if count == BVH_INVALID {
@@ -171,7 +190,9 @@ fn bvh_closest_hit(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> BvhHit {
             continue;
         }
         for (var k = 0u; k < count; k += 1u) {
-            bvh_blas(tlas_prims[first + k], o, d, tmin, &best);
+            let slot = first + k;
+            let prim = bitcast<vec4<u32>>(bvh_nodes[header.y + slot / 4u])[slot % 4u];
+            bvh_blas(prim, header.z, o, d, tmin, &best);
         }
     }
     if best.instance == BVH_INVALID {

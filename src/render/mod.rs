@@ -274,12 +274,12 @@ pub fn upload(queue: &RenderQueue, texture: &Texture, image: &CausticImage) {
 pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
     composite::build(app);
-    if aaps::build(app) {
-        trace::build(app);
-        volume::build(app);
-        image_space::build(app);
-        photon_map::build(app);
-    }
+    // Each technique checks what it needs of the GPU itself and warns when it cannot run.
+    aaps::build(app);
+    trace::build(app);
+    volume::build(app);
+    image_space::build(app);
+    photon_map::build(app);
     readback::build(app);
     span::build(app);
     memory::build(app);

@@ -10,6 +10,14 @@
 //! - `instances`: [`GpuInstance`], the world-to-object transform as three rows plus the root node
 //!   of its BLAS.
 //! - `tlas_nodes` (same encoding, leaves index `tlas_prims`) and `tlas_prims` (instance index).
+//!
+//! On the GPU these seven arrays are packed into three storage buffers ([`GpuBvh::packed`]), so a
+//! tracer fits WebGPU's default of 8 storage buffers per shader stage with room for its own:
+//! - **nodes**: a header `vec4<u32>(tlas nodes, first prim word, first BLAS node word, 0)`,
+//!   then the TLAS nodes, the TLAS prims (four `u32` per `vec4`), then the BLAS nodes;
+//! - **triangles**: six `vec4` per triangle, the three above and the three vertex normals;
+//! - **instances**: seven `vec4` per instance (112 bytes), the [`GpuInstance`] and the three
+//!   material rows ([`material_rows`]).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -164,6 +172,46 @@ impl GpuBvh {
         push_nodes(&mut out.tlas_nodes, nodes, 0, 0);
         out.tlas_prims = prims.to_vec();
         out
+    }
+
+    /// The three storage buffers of the GPU (module doc): nodes, triangles, instances. Each is
+    /// at least 16 bytes (storage bindings may not be empty).
+    pub fn packed(&self) -> [Vec<u8>; 3] {
+        let word = |v: f32| v.to_le_bytes();
+        let tlas_nodes = (self.tlas_nodes.len() / 2) as u32;
+        let prim_base = 1 + self.tlas_nodes.len() as u32;
+        let blas_base = prim_base + self.tlas_prims.len().div_ceil(4) as u32;
+        let mut nodes: Vec<u8> = [tlas_nodes, prim_base, blas_base, 0]
+            .iter()
+            .flat_map(|u| u.to_le_bytes())
+            .collect();
+        nodes.extend(self.tlas_nodes.iter().flatten().flat_map(|&v| word(v)));
+        let mut prims: Vec<u8> = self
+            .tlas_prims
+            .iter()
+            .flat_map(|u| u.to_le_bytes())
+            .collect();
+        prims.resize(prims.len().div_ceil(16) * 16, 0);
+        nodes.extend(prims);
+        nodes.extend(self.nodes.iter().flatten().flat_map(|&v| word(v)));
+        let mut triangles = Vec::with_capacity(self.triangles.len() * 32);
+        for (tri, normals) in self.triangles.chunks(3).zip(self.normals.chunks(3)) {
+            for v in tri.iter().chain(normals) {
+                triangles.extend(v.iter().flat_map(|&x| word(x)));
+            }
+        }
+        triangles.resize(triangles.len().max(16), 0);
+        let mut instances = Vec::with_capacity(self.instances.len() * 112);
+        for (inst, mat) in self
+            .instance_bytes()
+            .chunks(64)
+            .zip(self.materials.chunks(3))
+        {
+            instances.extend_from_slice(inst);
+            instances.extend(mat.iter().flatten().flat_map(|&x| word(x)));
+        }
+        instances.resize(instances.len().max(112), 0);
+        [nodes, triangles, instances]
     }
 
     /// `instances` as raw bytes.

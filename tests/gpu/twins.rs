@@ -15,8 +15,8 @@ fn wgsl_bvh_matches_cpu_bvh() {
         return;
     }
     let kernel = r#"
-@group(0) @binding(5) var<storage, read> rays: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> hits: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> rays: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> hits: array<vec4<u32>>;
 @compute @workgroup_size(64)
 fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
@@ -52,19 +52,8 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
             .iter()
             .flat_map(|(o, d)| [[o.x, o.y, o.z, 0.0], [d.x, d.y, d.z, 0.0]])
             .collect();
-        let prims: Vec<u8> = gpu
-            .tlas_prims
-            .iter()
-            .flat_map(|p| p.to_le_bytes())
-            .collect();
-        let inputs = [
-            f4_bytes(&gpu.nodes),
-            f4_bytes(&gpu.triangles),
-            gpu.instance_bytes(),
-            f4_bytes(&gpu.tlas_nodes),
-            prims,
-            f4_bytes(&ray_data),
-        ];
+        let [nodes, triangles, instances] = gpu.packed();
+        let inputs = [nodes, triangles, instances, f4_bytes(&ray_data)];
         let data = run_compute(&src, "trace_rays", 0, &inputs, n);
         let (mut hit_count, mut ties) = (0, 0);
         for (i, (o, d)) in rays.iter().enumerate() {

@@ -33,16 +33,16 @@ pub fn missing_aaps_capabilities(features: WgpuFeatures, storage_buffers: u32) -
     if !features.contains(WgpuFeatures::FLOAT32_BLENDABLE) {
         missing.push("Features::FLOAT32_BLENDABLE (additive splats into Rgba32Float)".into());
     }
-    if storage_buffers < 14 {
+    if storage_buffers < 8 {
         missing.push(format!(
-            "max_storage_buffers_per_shader_stage >= 14 (have {storage_buffers})"
+            "max_storage_buffers_per_shader_stage >= 8 (have {storage_buffers})"
         ));
     }
     missing
 }
 
 /// Render-app part; called from [`crate::render::build`] after the capability gate.
-/// Returns whether AAPS (and so the GPU techniques that share its gate) is on.
+/// Returns whether AAPS is on.
 pub(crate) fn build(app: &mut App) -> bool {
     let (features, storage, msaa) = {
         let Some(render_app) = app.get_sub_app(RenderApp) else {

@@ -111,7 +111,7 @@ pub fn aaps_passes(
     else {
         return;
     };
-    let (main, args, splat_group) = bind_groups(
+    let groups = bind_groups(
         ctx.render_device(),
         &cache,
         &pipelines,
@@ -166,17 +166,17 @@ pub fn aaps_passes(
         let span = diagnostics.pass_span(&mut pass, TASK_PASS);
         settle.settle(&mut pass);
         pass.set_pipeline(leaves);
-        pass.set_bind_group(0, &main, &[0]);
+        pass.set_bind_group(0, &groups.main, &[0]);
         pass.dispatch_workgroups(texel_groups, 1, 1);
         pass.set_pipeline(reduce);
         for k in 0..state.reduce_steps {
             let n = (atlas >> (k + 1)).max(1);
-            pass.set_bind_group(0, &main, &[(k as u64 * LEVEL_STRIDE) as u32]);
+            pass.set_bind_group(0, &groups.main, &[(k as u64 * LEVEL_STRIDE) as u32]);
             pass.dispatch_workgroups((n * n).div_ceil(64), 1, 1);
         }
         pass.set_pipeline(trace_args);
-        pass.set_bind_group(0, &main, &[0]);
-        pass.set_bind_group(1, &args, &[]);
+        pass.set_bind_group(0, &groups.main, &[0]);
+        pass.set_bind_group(1, &groups.args, &[]);
         pass.dispatch_workgroups(1, 1, 1);
         span.end(&mut pass);
     }
@@ -192,7 +192,7 @@ pub fn aaps_passes(
         let span = diagnostics.pass_span(&mut pass, TRACE_PASS);
         settle.settle(&mut pass);
         pass.set_pipeline(trace);
-        pass.set_bind_group(0, &main, &[0]);
+        pass.set_bind_group(0, &groups.trace, &[]);
         pass.dispatch_workgroups_indirect(&state.args, 0);
         span.end(&mut pass);
     }
@@ -203,8 +203,8 @@ pub fn aaps_passes(
             timestamp_writes: None,
         });
         pass.set_pipeline(draw_args);
-        pass.set_bind_group(0, &main, &[0]);
-        pass.set_bind_group(1, &args, &[]);
+        pass.set_bind_group(0, &groups.main, &[0]);
+        pass.set_bind_group(1, &groups.args, &[]);
         pass.dispatch_workgroups(1, 1, 1);
     }
     log.record(TRACE_PASS);
@@ -215,7 +215,7 @@ pub fn aaps_passes(
         (state, &state.args),
         buffer,
         (splat, splat_msaa),
-        &splat_group,
+        &groups.splat,
         &log,
     );
 
@@ -228,7 +228,7 @@ pub fn aaps_passes(
         });
         let span = diagnostics.pass_span(&mut pass, UPDATE_PASS);
         settle.settle(&mut pass);
-        pass.set_bind_group(0, &main, &[0]);
+        pass.set_bind_group(0, &groups.main, &[0]);
         pass.set_pipeline(variance);
         pass.dispatch_workgroups_indirect(&state.args, 4 * 4);
         pass.set_pipeline(update);
@@ -247,9 +247,19 @@ pub fn aaps_passes(
     }
 }
 
-/// The view's three bind groups: the compute passes' (scene, task buffer, accumulators,
-/// caustics buffer and its history, per-level uniforms), the indirect arguments', and the
-/// splat passes'.
+/// The bind groups of a view's passes.
+struct Groups {
+    /// The task buffer, variance and density passes (no scene).
+    main: BindGroup,
+    /// The trace: the scene, the quadtree, the splats and the counters.
+    trace: BindGroup,
+    /// The indirect arguments (group 1 of the argument writers).
+    args: BindGroup,
+    /// The splat passes.
+    splat: BindGroup,
+}
+
+/// The view's bind groups ([`Groups`]).
 fn bind_groups(
     device: &RenderDevice,
     cache: &PipelineCache,
@@ -258,33 +268,42 @@ fn bind_groups(
     state: &AapsViewState,
     buffer: &ViewCausticsBuffer,
     depth: &TextureView,
-) -> (BindGroup, BindGroup, BindGroup) {
+) -> Groups {
     let b = &scene.buffers;
     let main: BindGroup = device.create_bind_group(
         "caustics:bind_group:aaps",
         &cache.get_bind_group_layout(&pipelines.compute_layout),
-        &BindGroupEntries::sequential((
-            b[0].as_entire_binding(),
-            b[1].as_entire_binding(),
-            b[2].as_entire_binding(),
-            b[3].as_entire_binding(),
-            b[4].as_entire_binding(),
-            b[5].as_entire_binding(),
-            b[6].as_entire_binding(),
-            state.quadtree.as_entire_binding(),
-            b[7].as_entire_binding(),
-            state.params.as_entire_binding(),
-            state.splats.as_entire_binding(),
-            state.accum.as_entire_binding(),
-            state.density[0].as_entire_binding(),
-            state.density[1].as_entire_binding(),
-            &buffer.view,
-            &state.history.1,
-            BindingResource::Buffer(BufferBinding {
-                buffer: &state.levels,
-                offset: 0,
-                size: Some(core::num::NonZeroU64::new(16).unwrap()),
-            }),
+        &BindGroupEntries::with_indices((
+            (7, state.quadtree.as_entire_binding()),
+            (9, state.params.as_entire_binding()),
+            (10, state.splats.as_entire_binding()),
+            (11, state.accum.as_entire_binding()),
+            (12, state.density[0].as_entire_binding()),
+            (13, state.density[1].as_entire_binding()),
+            (14, &buffer.view),
+            (15, &state.history.1),
+            (
+                16,
+                BindingResource::Buffer(BufferBinding {
+                    buffer: &state.levels,
+                    offset: 0,
+                    size: Some(core::num::NonZeroU64::new(16).unwrap()),
+                }),
+            ),
+        )),
+    );
+    let trace = device.create_bind_group(
+        "caustics:bind_group:aaps_trace",
+        &cache.get_bind_group_layout(&pipelines.trace_layout),
+        &BindGroupEntries::with_indices((
+            (0, b[0].as_entire_binding()),
+            (1, b[1].as_entire_binding()),
+            (2, b[2].as_entire_binding()),
+            (7, state.quadtree.as_entire_binding()),
+            (8, b[3].as_entire_binding()),
+            (9, state.params.as_entire_binding()),
+            (10, state.splats.as_entire_binding()),
+            (11, state.accum.as_entire_binding()),
         )),
     );
     let args = device.create_bind_group(
@@ -305,7 +324,12 @@ fn bind_groups(
             state.world_from_clip.as_entire_binding(),
         )),
     );
-    (main, args, splat_group)
+    Groups {
+        main,
+        trace,
+        args,
+        splat: splat_group,
+    }
 }
 
 /// Last frame's result becomes the history of the variance pass.

@@ -44,8 +44,11 @@ pub struct AapsShaders {
 /// Layouts and pipeline ids.
 #[derive(Resource)]
 pub struct AapsPipelines {
-    /// Group 0 of the compute passes.
+    /// Group 0 of the compute passes but the trace (no scene).
     pub compute_layout: BindGroupLayoutDescriptor,
+    /// Group 0 of the trace: the packed scene, the quadtree, the splats and the counters (7
+    /// storage buffers).
+    pub trace_layout: BindGroupLayoutDescriptor,
     /// Group 1 (indirect arguments) of the argument writers.
     pub args_layout: BindGroupLayoutDescriptor,
     /// Group 0 of the splat passes.
@@ -91,7 +94,7 @@ pub(super) fn queue_aaps_trace_variant(
         return;
     };
     let features = crate::render::trace::wanted_features(&scene, specialization.as_deref());
-    let layout = pipelines.compute_layout.clone();
+    let layout = pipelines.trace_layout.clone();
     pipelines.trace.get_or_queue(features, &cache, |defs| {
         trace_descriptor(&layout, &shaders.compute, defs)
     });
@@ -118,28 +121,39 @@ pub(super) fn init_aaps_pipelines(
     let ro = || storage_buffer_read_only_sized(false, None);
     let rw = || storage_buffer_sized(false, None);
     let tex = || texture_2d(TextureSampleType::Float { filterable: false });
+    // Two layouts, so every pipeline binds at most 8 storage buffers per stage (WebGPU's
+    // default): the task buffer, variance and density passes bind no scene; the trace binds
+    // the scene and what it writes.
     let compute_layout = BindGroupLayoutDescriptor::new(
         "caustics:bind_group_layout:aaps",
-        &BindGroupLayoutEntries::sequential(
+        &BindGroupLayoutEntries::with_indices(
             ShaderStages::COMPUTE,
             (
-                ro(),
-                ro(),
-                ro(),
-                ro(),
-                ro(),
-                ro(),
-                ro(),
-                rw(),
-                ro(),
-                uniform_buffer_sized(false, None),
-                rw(),
-                rw(),
-                rw(),
-                rw(),
-                tex(),
-                tex(),
-                uniform_buffer_sized(true, None),
+                (7, rw()),
+                (9, uniform_buffer_sized(false, None)),
+                (10, rw()),
+                (11, rw()),
+                (12, rw()),
+                (13, rw()),
+                (14, tex()),
+                (15, tex()),
+                (16, uniform_buffer_sized(true, None)),
+            ),
+        ),
+    );
+    let trace_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:aaps_trace",
+        &BindGroupLayoutEntries::with_indices(
+            ShaderStages::COMPUTE,
+            (
+                (0, ro()),
+                (1, ro()),
+                (2, ro()),
+                (7, rw()),
+                (8, ro()),
+                (9, uniform_buffer_sized(false, None)),
+                (10, rw()),
+                (11, rw()),
             ),
         ),
     );
@@ -217,6 +231,7 @@ pub(super) fn init_aaps_pipelines(
     });
     commands.insert_resource(AapsPipelines {
         compute_layout,
+        trace_layout,
         args_layout,
         splat_layout,
         compute,

@@ -30,9 +30,9 @@ struct Path {
 // Barycentrics of a world point in the plane of triangle `slot` (extrapolated outside it):
 // the differential rays are updated "as if they hit the same triangle" (section 3.3.2).
 fn plane_barycentrics(inst: BvhInstance, slot: u32, p: vec3<f32>) -> vec2<f32> {
-    let q = object_point(inst, p) - bvh_triangles[3u * slot].xyz;
-    let e1 = bvh_triangles[3u * slot + 1u].xyz;
-    let e2 = bvh_triangles[3u * slot + 2u].xyz;
+    let q = object_point(inst, p) - bvh_tri(slot, 0u).xyz;
+    let e1 = bvh_tri(slot, 1u).xyz;
+    let e2 = bvh_tri(slot, 2u).xyz;
     let d00 = dot(e1, e1);
     let d01 = dot(e1, e2);
     let d11 = dot(e2, e2);
@@ -154,7 +154,7 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             }
             return;
         }
-        let m0 = materials[3u * hit.instance];
+        let m0 = scene_material(hit.instance, 0u);
         let kind = bitcast<u32>(m0.x);
         if (*path).bounces == 0u && kind == MAT_DIFFUSE {
             // Section 3.1.2: a photon whose first hit is not a caster is discarded.
@@ -166,8 +166,8 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
         }
 #ifdef TRACE_DIELECTRICS
         if (*path).medium != INVALID {
-            let mm = materials[3u * (*path).medium];
-            (*path).flux *= optics_beer_lambert(materials[3u * (*path).medium + 1u].xyz, mm.w, hit.t);
+            let mm = scene_material((*path).medium, 0u);
+            (*path).flux *= optics_beer_lambert(scene_material((*path).medium, 1u).xyz, mm.w, hit.t);
         }
 #endif
         let sh = surface_hit(hit, (*path).o, (*path).d);
@@ -204,7 +204,7 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
         (*path).ou = tu.xyz;
         (*path).ov = tv.xyz;
         if kind == MAT_CONDUCTOR {
-            (*path).flux *= optics_fresnel_schlick(-dot(d, ns_f), materials[3u * hit.instance + 2u].xyz);
+            (*path).flux *= optics_fresnel_schlick(-dot(d, ns_f), scene_material(hit.instance, 2u).xyz);
             (*path).d = reflect_guarded(d, ns_f, ng_f);
             (*path).du = reflect_guarded((*path).du, nu, ng_f);
             (*path).dv = reflect_guarded((*path).dv, nv, ng_f);

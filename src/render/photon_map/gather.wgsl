@@ -152,7 +152,7 @@ fn mirror_term(x: vec3<f32>) -> vec4<f32> {
     var f = vec3(1.0);
     var travelled = hit.t;
     for (var bounce = 0u; bounce < params.emit.z; bounce += 1u) {
-        f *= optics_fresnel_schlick(-dot(d, s.ns_f), materials[3u * hit.instance + 2u].xyz);
+        f *= optics_fresnel_schlick(-dot(d, s.ns_f), scene_material(hit.instance, 2u).xyz);
         let o = optics_offset_ray_origin(s.pos, s.ng_f, params.eye.w);
         d = reflect_guarded(d, s.ns_f, s.ng_f);
         hit = bvh_closest_hit(o, d, 0.0, BVH_FAR);
@@ -172,7 +172,7 @@ fn mirror_term(x: vec3<f32>) -> vec4<f32> {
             let g = gather_at(s.pos, n, r);
             count_gather(g);
             atomicAdd(&header[C_MIRROR_PIXELS], 1u);
-            let albedo = materials[3u * hit.instance + 2u].xyz;
+            let albedo = scene_material(hit.instance, 2u).xyz;
             return vec4(f * albedo * g.e, 1.0);
         }
     }

@@ -118,20 +118,27 @@ pub fn photon_map_passes(
         return;
     };
     let b = &scene.buffers;
-    let group = ctx.render_device().create_bind_group(
-        "caustics:bind_group:photon_map",
-        &cache.get_bind_group_layout(&pipelines.layout),
+    let trace_group = ctx.render_device().create_bind_group(
+        "caustics:bind_group:photon_map_trace",
+        &cache.get_bind_group_layout(&pipelines.trace_layout),
         &BindGroupEntries::with_indices((
             (0, b[0].as_entire_binding()),
             (1, b[1].as_entire_binding()),
             (2, b[2].as_entire_binding()),
-            (3, b[3].as_entire_binding()),
-            (4, b[4].as_entire_binding()),
-            (5, b[5].as_entire_binding()),
-            (6, b[6].as_entire_binding()),
-            (8, b[7].as_entire_binding()),
+            (8, b[3].as_entire_binding()),
             (9, state.params.as_entire_binding()),
             (10, state.photons.as_entire_binding()),
+            (11, state.header.as_entire_binding()),
+        )),
+    );
+    let gather_group = ctx.render_device().create_bind_group(
+        "caustics:bind_group:photon_map_gather",
+        &cache.get_bind_group_layout(&pipelines.gather_layout),
+        &BindGroupEntries::with_indices((
+            (0, b[0].as_entire_binding()),
+            (1, b[1].as_entire_binding()),
+            (2, b[2].as_entire_binding()),
+            (9, state.params.as_entire_binding()),
             (11, state.header.as_entire_binding()),
             (12, src.sorted.as_entire_binding()),
             (13, src.cells.as_entire_binding()),
@@ -182,7 +189,7 @@ pub fn photon_map_passes(
             &mut ctx,
             &settle,
             TRACE_PASS,
-            &[(trace, &group, photon_groups(photons))],
+            &[(trace, &trace_group, photon_groups(photons))],
         );
         log.record(TRACE_PASS);
         compute_pass(&mut ctx, &settle, GRID_PASS, &stages);
@@ -198,7 +205,11 @@ pub fn photon_map_passes(
         &mut ctx,
         &settle,
         name,
-        &[(gather, &group, [size.x.div_ceil(8), size.y.div_ceil(8), 1])],
+        &[(
+            gather,
+            &gather_group,
+            [size.x.div_ceil(8), size.y.div_ceil(8), 1],
+        )],
     );
     log.record(name);
     let diagnostics = ctx.diagnostic_recorder();

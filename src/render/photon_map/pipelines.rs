@@ -71,8 +71,10 @@ pub struct PhotonMapShaders {
 /// Layouts and pipeline ids.
 #[derive(Resource)]
 pub struct PhotonMapPipelines {
-    /// Group 0 of `pm_trace` and `pm_gather`.
-    pub layout: BindGroupLayoutDescriptor,
+    /// Group 0 of `pm_trace`.
+    pub trace_layout: BindGroupLayoutDescriptor,
+    /// Group 0 of `pm_gather`.
+    pub gather_layout: BindGroupLayoutDescriptor,
     /// Group 0 of the grid build.
     pub grid_layout: BindGroupLayoutDescriptor,
     /// `pm_trace`, specialised by the scene's features (`render::trace`), queued by
@@ -104,21 +106,33 @@ pub(super) fn queue_photon_map_pipelines(
     use binding_types::*;
     let ro = || storage_buffer_read_only_sized(false, None);
     let rw = || storage_buffer_sized(false, None);
-    let layout = BindGroupLayoutDescriptor::new(
-        "caustics:bind_group_layout:photon_map",
+    // Two layouts of at most 8 storage buffers (WebGPU's default per stage): the trace binds
+    // the packed scene with its lights and writes the photons; the gather binds the scene
+    // without lights (it follows mirror reflections) and the grid.
+    let trace_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:photon_map_trace",
         &BindGroupLayoutEntries::with_indices(
             ShaderStages::COMPUTE,
             (
                 (0, ro()),
                 (1, ro()),
                 (2, ro()),
-                (3, ro()),
-                (4, ro()),
-                (5, ro()),
-                (6, ro()),
                 (8, ro()),
                 (9, uniform_buffer_sized(false, None)),
                 (10, rw()),
+                (11, rw()),
+            ),
+        ),
+    );
+    let gather_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:photon_map_gather",
+        &BindGroupLayoutEntries::with_indices(
+            ShaderStages::COMPUTE,
+            (
+                (0, ro()),
+                (1, ro()),
+                (2, ro()),
+                (9, uniform_buffer_sized(false, None)),
                 (11, rw()),
                 (12, ro()),
                 (13, ro()),
@@ -158,10 +172,11 @@ pub(super) fn queue_photon_map_pipelines(
                 ..default()
             })
         };
-    let gather = queue("pm_gather", &layout, &shaders.compute);
+    let gather = queue("pm_gather", &gather_layout, &shaders.compute);
     let grid = GRID_ENTRIES.map(|e| queue(e, &grid_layout, &shaders.grid));
     commands.insert_resource(PhotonMapPipelines {
-        layout,
+        trace_layout,
+        gather_layout,
         grid_layout,
         trace: Default::default(),
         gather,
@@ -181,7 +196,7 @@ pub(super) fn queue_photon_map_trace_variant(
         return;
     };
     let features = crate::render::trace::wanted_features(&scene, specialization.as_deref());
-    let layout = pipelines.layout.clone();
+    let layout = pipelines.trace_layout.clone();
     pipelines
         .trace
         .get_or_queue(features, &cache, |shader_defs| ComputePipelineDescriptor {

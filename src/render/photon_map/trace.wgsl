@@ -83,8 +83,8 @@ fn trace_photon(i: u32) -> PathEnd {
         }
 #ifdef TRACE_DIELECTRICS
         if medium != INVALID {
-            let mm = materials[3u * medium];
-            flux *= optics_beer_lambert(materials[3u * medium + 1u].xyz, mm.w, hit.t);
+            let mm = scene_material(medium, 0u);
+            flux *= optics_beer_lambert(scene_material(medium, 1u).xyz, mm.w, hit.t);
         }
 #endif
         let s = surface_hit(hit, o, d);
@@ -110,14 +110,14 @@ fn trace_photon(i: u32) -> PathEnd {
         }
         bounces += 1u;
         if s.kind == MAT_CONDUCTOR {
-            flux *= optics_fresnel_schlick(-dot(d, s.ns_f), materials[3u * hit.instance + 2u].xyz);
+            flux *= optics_fresnel_schlick(-dot(d, s.ns_f), scene_material(hit.instance, 2u).xyz);
             d = reflect_guarded(d, s.ns_f, s.ng_f);
             o = optics_offset_ray_origin(s.pos, s.ng_f, scale);
             continue;
         }
 #ifdef TRACE_DIELECTRICS
         // Dielectric: reflect with the Fresnel probability (unbiased, flux unchanged).
-        let m0 = materials[3u * hit.instance];
+        let m0 = scene_material(hit.instance, 0u);
         let thin = m0.z > 0.5;
         let eta = select(max(m0.y, 1.0), 1.0 / max(m0.y, 1.0), s.entering);
         let r = optics_fresnel_dielectric(-dot(d, s.ns_f), eta);

@@ -31,8 +31,9 @@ use crate::render::ExtractedCaustics;
 use crate::scene::CausticsScene;
 use scene::{ExtractedCausticsScene, TraceSceneBuffers};
 
-/// The WGSL every photon tracer starts with: BVH traversal (bindings 0 to 4), the optics twins
-/// and the scene's surfaces and lights (bindings 5, 6 and 8).
+/// The WGSL every photon tracer starts with: BVH traversal over the packed scene (bindings 0
+/// to 2: nodes, triangles with normals, instances with materials), the optics twins and the
+/// scene's surfaces and lights (binding 8).
 pub fn tracer_source() -> String {
     [
         include_str!("../bvh.wgsl"),

@@ -172,8 +172,10 @@ pub fn gpu_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity, 
 pub struct TraceSceneBuffers {
     /// Generation of the scene uploaded.
     pub generation: u64,
-    /// bvh nodes, triangles, instances, TLAS nodes, TLAS prims, normals, materials, lights.
-    pub buffers: [Buffer; 8],
+    /// Nodes (the TLAS, its prims and every BLAS behind a header), triangles with their
+    /// normals, instances with their materials ([`GpuBvh::packed`]), and lights: bindings 0, 1,
+    /// 2 and 8 of every tracer.
+    pub buffers: [Buffer; 4],
     /// Lights in the table.
     pub lights: u32,
     /// Extent of the scene, metres (ray offsets).
@@ -190,13 +192,6 @@ pub struct TraceSceneBuffers {
 #[derive(Resource, Clone, Default)]
 pub struct ExtractedCausticsScene(pub CausticsScene);
 
-fn f4(v: &[[f32; 4]]) -> Vec<u8> {
-    let mut b: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-    // Storage buffers may not be empty.
-    b.resize(b.len().max(16), 0);
-    b
-}
-
 impl TraceSceneBuffers {
     /// Flatten and upload `scene`; `None` when no caustic light reaches a caster (nothing for
     /// a photon tracer to do).
@@ -208,32 +203,12 @@ impl TraceSceneBuffers {
         let bvh = GpuBvh::from_tlas(&scene.tlas);
         let mut light_bytes: Vec<u8> = lights.iter().flat_map(|(_, l)| l.bytes()).collect();
         light_bytes.resize(light_bytes.len().max(80), 0);
-        let mut prims: Vec<u8> = bvh
-            .tlas_prims
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
-        prims.resize(prims.len().max(16), 0);
-        let mut instances = bvh.instance_bytes();
-        instances.resize(instances.len().max(64), 0);
-        let contents = [
-            f4(&bvh.nodes),
-            f4(&bvh.triangles),
-            instances,
-            f4(&bvh.tlas_nodes),
-            prims,
-            f4(&bvh.normals),
-            f4(&bvh.materials),
-            light_bytes,
-        ];
+        let [nodes, triangles, instances] = bvh.packed();
+        let contents = [nodes, triangles, instances, light_bytes];
         let names = [
-            "caustics:trace:bvh_nodes",
-            "caustics:trace:bvh_triangles",
-            "caustics:trace:bvh_instances",
-            "caustics:trace:tlas_nodes",
-            "caustics:trace:tlas_prims",
-            "caustics:trace:normals",
-            "caustics:trace:materials",
+            "caustics:trace:nodes",
+            "caustics:trace:triangles",
+            "caustics:trace:instances",
             "caustics:trace:lights",
         ];
         let buffers = std::array::from_fn(|i| {

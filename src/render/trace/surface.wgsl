@@ -1,11 +1,10 @@
-// The scene's surfaces and lights for every BVH photon tracer (AAPS, the photon map): bindings
-// 5, 6 and 8 of group 0 (bvh.wgsl holds 0 to 4), the light table of src/render/trace/scene.rs,
+// The scene's surfaces and lights for every BVH photon tracer (AAPS, the photon map): binding
+// 8 of group 0 (bvh.wgsl holds 0 to 2, the packed scene with its normals and materials), the
+// light table of src/render/trace/scene.rs,
 // surface normals at a hit, the tracer's guarded reflection and refraction, and emission from
 // a light's parameter square. Concatenated after bvh.wgsl and optics.wgsl
 // (`trace::tracer_source`).
 
-@group(0) @binding(5) var<storage, read> bvh_normals: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> materials: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read> lights: array<GpuLight>;
 
 // One light (80 bytes, `GpuLight` in src/render/trace/scene.rs).
@@ -50,8 +49,8 @@ fn world_normal(inst: BvhInstance, n: vec3<f32>) -> vec3<f32> {
 
 // Interpolated shading normal of triangle `slot` at barycentrics (u, v), world space.
 fn shading_normal(inst: BvhInstance, slot: u32, uv: vec2<f32>) -> vec3<f32> {
-    let n = bvh_normals[3u * slot] * (1.0 - uv.x - uv.y) + bvh_normals[3u * slot + 1u] * uv.x
-        + bvh_normals[3u * slot + 2u] * uv.y;
+    let n = bvh_normal(slot, 0u) * (1.0 - uv.x - uv.y) + bvh_normal(slot, 1u) * uv.x
+        + bvh_normal(slot, 2u) * uv.y;
     return world_normal(inst, n.xyz);
 }
 
@@ -87,9 +86,9 @@ struct SurfaceHit {
 fn surface_hit(hit: BvhHit, o: vec3<f32>, d: vec3<f32>) -> SurfaceHit {
     var s: SurfaceHit;
     s.pos = o + d * hit.t;
-    s.kind = bitcast<u32>(materials[3u * hit.instance].x);
+    s.kind = bitcast<u32>(scene_material(hit.instance, 0u).x);
     let inst = bvh_instances[hit.instance];
-    s.ng = world_normal(inst, cross(bvh_triangles[3u * hit.slot + 1u].xyz, bvh_triangles[3u * hit.slot + 2u].xyz));
+    s.ng = world_normal(inst, cross(bvh_tri(hit.slot, 1u).xyz, bvh_tri(hit.slot, 2u).xyz));
     var ns = shading_normal(inst, hit.slot, hit.uv);
     s.ok = finite3(s.pos) && any(s.ng != vec3(0.0));
     if all(ns == vec3(0.0)) {
