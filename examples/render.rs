@@ -6,8 +6,12 @@
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
 //!     [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]
-//!     [--stereo METRES] [--webgpu-limits]
+//!     [--stereo METRES] [--webgpu-limits] [--without FEATURE,...]
 //! ```
+//!
+//! `--webgpu-limits` starts the device with WebGPU's default limits; `--without` leaves
+//! adapter features off it (`float32_blendable`, `texture_adapter_specific_format_features`),
+//! to try the fallbacks a browser may need.
 //!
 //! The scene path is relative to the working directory (its buffers and images to the glTF's
 //! folder). Errors (missing or unreadable file, no camera, no lights, no adapter, bad option, a
@@ -220,6 +224,25 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
             "--out-png" => out.png = Some(path(v)?),
             "--json" => out.json = Some(path(v)?),
             "--compare" => out.compare = Some(path(v)?),
+            "--without" => {
+                // Leave adapter features off the device (the techniques' fallbacks).
+                let t = v.ok_or("--without needs a feature list")?;
+                for name in t.split(',') {
+                    job.disabled_features |= match name {
+                        "float32_blendable" => {
+                            bevy::render::settings::WgpuFeatures::FLOAT32_BLENDABLE
+                        }
+                        "texture_adapter_specific_format_features" => {
+                            bevy::render::settings::WgpuFeatures::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
+                        }
+                        _ => {
+                            return Err(format!(
+                                "--without: unknown feature '{name}' (available: float32_blendable, texture_adapter_specific_format_features)"
+                            ));
+                        }
+                    };
+                }
+            }
             "--webgpu-limits" => {
                 // The device gets WebGPU's default limits instead of the adapter's.
                 job.webgpu_limits = true;
@@ -237,7 +260,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES] [--webgpu-limits]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES] [--webgpu-limits] [--without FEATURE,...]")?;
     Ok((job, out))
 }
 

@@ -757,6 +757,8 @@ mod aaps;
 mod bvh;
 #[path = "cpu/energy.rs"]
 mod energy;
+#[path = "cpu/fixed_splat.rs"]
+mod fixed_splat;
 #[path = "cpu/image_space.rs"]
 mod image_space;
 #[path = "cpu/inspector.rs"]

@@ -29,6 +29,8 @@ mod twins;
 mod volume;
 #[path = "gpu/volume_modes.rs"]
 mod volume_modes;
+#[path = "gpu/webgpu.rs"]
+mod webgpu;
 
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -124,8 +124,9 @@ pub fn photon_flux_scale(texels: f32, samples: f32) -> f32 {
     }
 }
 
-/// Units per lux of the photon map's fixed-point words: 1/256 lux resolution, 2^56 / 256 ≈
-/// 2.8e14 lux per pixel before a 64-bit word wraps.
+/// Units per lux of the photon map's fixed-point words (and of the fixed-point splats of
+/// `render::fixed_splat`): 1/256 lux resolution, 2^56 / 256 ≈ 2.8e14 lux per pixel before a
+/// 64-bit word wraps.
 pub const FIXED_POINT_SCALE: f32 = 256.0;
 
 /// One photon's irradiance `e` (lux, ≥ 0) in the photon map's fixed point with stochastic
@@ -143,6 +144,12 @@ pub fn fixed_point_word(e: f32, scale: f32, u: f32) -> (u32, bool) {
     } else {
         (v as u32, false)
     }
+}
+
+/// The value in lux of a 64-bit sum of [`fixed_point_word`]s, low word `lo`, high word `hi`.
+#[inline]
+pub fn fixed_point_value(lo: u32, hi: u32, scale: f32) -> f32 {
+    hi as f32 * (4_294_967_296.0 / scale) + lo as f32 / scale
 }
 
 /// SVGF's edge-stopping weight between pixels p and q (Schied et al. 2017 eq. 3-5):

@@ -7,6 +7,7 @@
 
 pub mod aaps;
 pub mod composite;
+pub mod fixed_splat;
 pub mod image_space;
 pub mod memory;
 pub mod photon_map;
@@ -275,6 +276,7 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     app.add_plugins(ExtractComponentPlugin::<Caustics>::default());
     composite::build(app);
     // Each technique checks what it needs of the GPU itself and warns when it cannot run.
+    fixed_splat::build(app);
     aaps::build(app);
     trace::build(app);
     volume::build(app);

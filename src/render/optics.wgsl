@@ -367,6 +367,11 @@ fn optics_fixed_point_word(e: f32, scale: f32, u: f32) -> vec2<u32> {
     return vec2(u32(v), 0u);
 }
 
+// fixed_point_value (src/optics/image_space.rs): a 64-bit sum of words in lux.
+fn optics_fixed_point_value(lo: u32, hi: u32, scale: f32) -> f32 {
+    return f32(hi) * (4294967296.0 / scale) + f32(lo) / scale;
+}
+
 // svgf_weight (src/optics/image_space.rs): SVGF's edge-stopping weight.
 fn optics_svgf_weight(dz: f32, dz_scaled: f32, n_dot: f32, sigma_n: f32, dl: f32, l_sigma: f32) -> f32 {
     let wz = abs(dz) / (abs(dz_scaled) + 1.0e-6);

@@ -23,16 +23,17 @@ use bevy::shader::Shader;
 /// What the adapter offers AAPS (render world).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct AapsSupport {
-    /// `Rgba32Float` can be multisampled 4x and resolved (small-splat MSAA).
+    /// `Rgba32Float` can be multisampled 4x, resolved and blended (small-splat MSAA).
     pub msaa: bool,
+    /// Splats add into fixed-point atomics instead of blending (no `FLOAT32_BLENDABLE`;
+    /// `render::fixed_splat`).
+    pub fixed: bool,
 }
 
-/// What AAPS needs of the GPU, as a list of what is missing.
-pub fn missing_aaps_capabilities(features: WgpuFeatures, storage_buffers: u32) -> Vec<String> {
+/// What AAPS needs of the GPU, as a list of what is missing. (Without `FLOAT32_BLENDABLE` it
+/// falls back to fixed-point splats, `render::fixed_splat`.)
+pub fn missing_aaps_capabilities(storage_buffers: u32) -> Vec<String> {
     let mut missing = Vec::new();
-    if !features.contains(WgpuFeatures::FLOAT32_BLENDABLE) {
-        missing.push("Features::FLOAT32_BLENDABLE (additive splats into Rgba32Float)".into());
-    }
     if storage_buffers < 8 {
         missing.push(format!(
             "max_storage_buffers_per_shader_stage >= 8 (have {storage_buffers})"
@@ -44,7 +45,11 @@ pub fn missing_aaps_capabilities(features: WgpuFeatures, storage_buffers: u32) -
 /// Render-app part; called from [`crate::render::build`] after the capability gate.
 /// Returns whether AAPS is on.
 pub(crate) fn build(app: &mut App) -> bool {
-    let (features, storage, msaa) = {
+    let fixed = app
+        .get_sub_app(RenderApp)
+        .and_then(|r| r.world().get_resource::<super::fixed_splat::FixedSplats>())
+        .is_some_and(|f| f.0);
+    let (storage, msaa) = {
         let Some(render_app) = app.get_sub_app(RenderApp) else {
             return false;
         };
@@ -62,13 +67,9 @@ pub(crate) fn build(app: &mut App) -> bool {
             && device
                 .features()
                 .contains(WgpuFeatures::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
-        (
-            device.features(),
-            device.limits().max_storage_buffers_per_shader_stage,
-            msaa,
-        )
+        (device.limits().max_storage_buffers_per_shader_stage, msaa)
     };
-    let missing = missing_aaps_capabilities(features, storage);
+    let missing = missing_aaps_capabilities(storage);
     if !missing.is_empty() {
         warn!(
             "bevy_caustics: the Aaps technique is disabled: the GPU lacks {}",
@@ -78,9 +79,11 @@ pub(crate) fn build(app: &mut App) -> bool {
     }
     if !msaa {
         warn!(
-            "bevy_caustics: small-splat MSAA is off: Rgba32Float cannot be multisampled 4x and resolved here"
+            "bevy_caustics: small-splat MSAA is off: Rgba32Float cannot be multisampled 4x and resolved here; small splats are drawn with the plain ones"
         );
     }
+    // The MSAA pass blends its samples, so fixed-point splats draw every splat plainly.
+    let msaa = msaa && !fixed;
     let shaders = {
         let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
         pipelines::AapsShaders {
@@ -99,7 +102,7 @@ pub(crate) fn build(app: &mut App) -> bool {
     };
     render_app
         .insert_resource(shaders)
-        .insert_resource(AapsSupport { msaa })
+        .insert_resource(AapsSupport { msaa, fixed })
         .add_systems(RenderStartup, pipelines::init_aaps_pipelines)
         .add_systems(
             Render,

@@ -14,6 +14,7 @@ use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 
 use super::pipelines::AapsPipelines;
 use super::view::{AapsFrame, AapsStereo, AapsViewState, LEVEL_STRIDE};
+use crate::render::fixed_splat::{self, FixedSplatPipelines};
 use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::trace::{TraceSpecialization, wanted_features};
@@ -71,9 +72,20 @@ pub fn aaps_passes(
     log: Res<CausticsDispatchLog>,
     settle: Res<SpanSettle>,
     specialization: Option<Res<TraceSpecialization>>,
+    fixed: Option<Res<FixedSplatPipelines>>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _, stereo) = view.into_inner();
+    // Fixed-point splats (no FLOAT32_BLENDABLE): the accumulator and its resolve.
+    let fixed = match (&state.fixed, fixed.as_deref()) {
+        (Some(accumulator), Some(p)) => Some(FixedSplat {
+            pipelines: p,
+            cache: &cache,
+            accumulator,
+        }),
+        (Some(_), None) => return,
+        (None, _) => None,
+    };
     let Some(scene) = scene else {
         return;
     };
@@ -147,6 +159,7 @@ pub fn aaps_passes(
             buffer,
             (splat, splat_msaa),
             &group,
+            fixed.as_ref(),
             &log,
         );
         return;
@@ -216,6 +229,7 @@ pub fn aaps_passes(
         buffer,
         (splat, splat_msaa),
         &groups.splat,
+        fixed.as_ref(),
         &log,
     );
 
@@ -355,9 +369,18 @@ fn copy_to_history(ctx: &mut RenderContext, buffer: &ViewCausticsBuffer, state: 
     );
 }
 
+/// The fixed-point fallback of a view's splats (`render::fixed_splat`).
+struct FixedSplat<'a> {
+    pipelines: &'a FixedSplatPipelines,
+    cache: &'a PipelineCache,
+    accumulator: &'a bevy::render::render_resource::Buffer,
+}
+
 /// The splat passes: small splats into the MSAA target resolved into the caustics buffer
 /// (overwriting it), then the plain splats blended on top (clearing it first when there was no
-/// MSAA pass).
+/// MSAA pass). With `fixed`, the plain splats add into its accumulator instead, resolved over
+/// the caustics buffer (there is no MSAA pass then).
+#[allow(clippy::too_many_arguments)]
 fn splat_passes(
     ctx: &mut RenderContext,
     (diagnostics, settle): (Option<&DiagnosticsRecorder>, &SpanSettle),
@@ -365,8 +388,13 @@ fn splat_passes(
     buffer: &ViewCausticsBuffer,
     (splat, splat_msaa): (&RenderPipeline, Option<&RenderPipeline>),
     splat_group: &BindGroup,
+    fixed: Option<&FixedSplat>,
     log: &CausticsDispatchLog,
 ) {
+    let fixed_group = fixed.map(|f| {
+        ctx.command_encoder().clear_buffer(f.accumulator, 0, None);
+        fixed_splat::fragment_group(ctx.render_device(), f.cache, f.pipelines, f.accumulator)
+    });
     let mut cleared = false;
     if let (Some(pipeline), Some((_, msaa_view))) = (splat_msaa, &state.msaa) {
         let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
@@ -419,8 +447,21 @@ fn splat_passes(
         settle.settle(&mut pass);
         pass.set_render_pipeline(splat);
         pass.set_bind_group(0, splat_group, &[]);
+        if let Some(group) = &fixed_group {
+            pass.set_bind_group(1, group, &[]);
+        }
         pass.draw_indirect(args, 8 * 4);
         span.end(&mut pass);
+    }
+    if let Some(f) = fixed {
+        fixed_splat::resolve(
+            ctx,
+            f.cache,
+            f.pipelines,
+            f.accumulator,
+            &buffer.view,
+            buffer.size,
+        );
     }
     log.record(SPLAT_PASS);
 }

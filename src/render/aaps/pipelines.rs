@@ -27,9 +27,15 @@ pub fn compute_source() -> String {
     .join("\n")
 }
 
-/// The WGSL of the splat module.
+/// The WGSL of the splat module (with the fixed-point fallback's entry point).
 pub fn splat_source() -> String {
-    [include_str!("params.wgsl"), include_str!("splat.wgsl")].join("\n")
+    [
+        include_str!("params.wgsl"),
+        include_str!("../optics.wgsl"),
+        crate::render::fixed_splat::fragment_source(),
+        include_str!("splat.wgsl"),
+    ]
+    .join("\n")
 }
 
 /// Shader handles, added to `Assets<Shader>` by the plugin.
@@ -191,10 +197,31 @@ pub(super) fn init_aaps_pipelines(
         dst_factor: BlendFactor::One,
         operation: BlendOperation::Add,
     };
+    // Without FLOAT32_BLENDABLE the plain splats add into fixed-point atomics (group 1) and
+    // write nothing to the target (`render::fixed_splat`).
+    let (layout, blend, write_mask) = if support.fixed {
+        (
+            vec![
+                splat_layout.clone(),
+                crate::render::fixed_splat::fragment_layout(),
+            ],
+            None,
+            ColorWrites::empty(),
+        )
+    } else {
+        (
+            vec![splat_layout.clone()],
+            Some(BlendState {
+                color: add,
+                alpha: add,
+            }),
+            ColorWrites::ALL,
+        )
+    };
     let raster = |label: &'static str, vs: &'static str, fs: &'static str, samples: u32| {
         cache.queue_render_pipeline(RenderPipelineDescriptor {
             label: Some(label.into()),
-            layout: vec![splat_layout.clone()],
+            layout: layout.clone(),
             vertex: VertexState {
                 shader: shaders.splat.clone(),
                 entry_point: Some(vs.into()),
@@ -205,11 +232,8 @@ pub(super) fn init_aaps_pipelines(
                 entry_point: Some(fs.into()),
                 targets: vec![Some(ColorTargetState {
                     format: CAUSTICS_BUFFER_FORMAT,
-                    blend: Some(BlendState {
-                        color: add,
-                        alpha: add,
-                    }),
-                    write_mask: ColorWrites::ALL,
+                    blend,
+                    write_mask,
                 })],
                 ..default()
             }),
@@ -220,7 +244,12 @@ pub(super) fn init_aaps_pipelines(
             ..default()
         })
     };
-    let splat = raster("caustics:pipeline:aaps_splat", "vs_big", "fs_big", 1);
+    let fs_big = if support.fixed {
+        "fs_big_fixed"
+    } else {
+        "fs_big"
+    };
+    let splat = raster("caustics:pipeline:aaps_splat", "vs_big", fs_big, 1);
     let splat_msaa = support.msaa.then(|| {
         raster(
             "caustics:pipeline:aaps_splat_msaa",

@@ -107,6 +107,18 @@ fn fs_big(in: VOut) -> @location(0) vec4<f32> {
     return vec4(in.e, 0.0);
 }
 
+// The plain splat without float blending: the same value added in fixed point (group 1,
+// src/render/fixed_splat/), nothing written to the target.
+@fragment
+fn fs_big_fixed(in: VOut) -> @location(0) vec4<f32> {
+    if dot(in.q, in.q) > 1.0 || !depth_visible(in.pos, in.world, in.plane) {
+        discard;
+    }
+    let width = textureDimensions(view_depth).x;
+    fixed_splat_add(vec2<u32>(in.pos.xy), width, in.e);
+    return vec4(0.0);
+}
+
 @fragment
 fn fs_small(in: VOutSample, @builtin(sample_index) sample: u32) -> @location(0) vec4<f32> {
     if dot(in.q, in.q) > 1.0 || !depth_visible(in.pos, in.world, vec4(0.0)) {

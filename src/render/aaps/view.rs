@@ -52,6 +52,8 @@ pub struct StateKey {
     pub min_max: [u32; 2],
     /// Small-splat MSAA target present.
     pub msaa: bool,
+    /// Fixed-point splats (no `FLOAT32_BLENDABLE`, `render::fixed_splat`).
+    pub fixed: bool,
 }
 
 /// The per-view GPU state of AAPS (render world).
@@ -81,6 +83,8 @@ pub struct AapsViewState {
     pub history: (Texture, TextureView),
     /// 4x multisampled target of the small splats, if small-splat MSAA is on.
     pub msaa: Option<(Texture, TextureView)>,
+    /// The fixed-point accumulator of the splats, without `FLOAT32_BLENDABLE`.
+    pub fixed: Option<Buffer>,
     /// The previous frame's `clip_from_world` (variance reprojection), once there is one.
     pub prev_clip_from_world: Option<Mat4>,
     /// The settings in use (sanitised).
@@ -106,7 +110,8 @@ impl AapsViewState {
                 &self.levels,
             ]
             .into_iter()
-            .chain(&self.density),
+            .chain(&self.density)
+            .chain(&self.fixed),
         ) + texture_bytes(&self.history.0)
             + self.msaa.as_ref().map_or(0, |m| texture_bytes(&m.0))
     }
@@ -276,6 +281,13 @@ impl AapsViewState {
             msaa: key
                 .msaa
                 .then(|| target(device, "caustics:aaps:msaa", key.size, 4)),
+            fixed: key.fixed.then(|| {
+                crate::render::fixed_splat::accumulator(
+                    device,
+                    "caustics:aaps:fixed_splats",
+                    key.size,
+                )
+            }),
             prev_clip_from_world: None,
             settings,
             budget,
@@ -427,6 +439,7 @@ pub fn prepare_aaps_views(
                 settings.max_density.to_bits(),
             ],
             msaa: support.msaa && settings.msaa_threshold > 0.0,
+            fixed: support.fixed,
         };
         let mut fresh = None;
         let state = match state {

@@ -588,7 +588,7 @@ fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var ch = 0u; ch < 3u; ch += 1u) {
         let lo = atomicExchange(&map[base + 2u * ch], 0u);
         let hi = atomicExchange(&map[base + 2u * ch + 1u], 0u);
-        e[ch] = f32(hi) * (4294967296.0 / FIXED_SCALE) + f32(lo) / FIXED_SCALE;
+        e[ch] = optics_fixed_point_value(lo, hi, FIXED_SCALE);
     }
     textureStore(out_a, p, vec4(e, 0.0));
     let z = camera_depth(p);

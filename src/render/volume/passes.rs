@@ -356,9 +356,16 @@ pub fn volume_passes(
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     settle: Res<SpanSettle>,
+    fixed: Option<Res<crate::render::fixed_splat::FixedSplatPipelines>>,
     mut ctx: RenderContext,
 ) {
     let (entity, buffer, prepass, state, _) = view.into_inner();
+    // Fixed-point splats (no FLOAT32_BLENDABLE): the accumulator and its resolve.
+    let fixed = match (&state.fixed, fixed.as_deref()) {
+        (Some(accumulator), Some(p)) => Some((p, accumulator)),
+        (Some(_), None) => return,
+        (None, _) => None,
+    };
     let (Some(depth), Some(gbuffer)) = (prepass.depth_view(), prepass.deferred_view()) else {
         return;
     };
@@ -400,6 +407,10 @@ pub fn volume_passes(
                 )
             })
             .collect();
+        let fixed_group = fixed.map(|(p, accumulator)| {
+            ctx.command_encoder().clear_buffer(accumulator, 0, None);
+            crate::render::fixed_splat::fragment_group(&device, &cache, p, accumulator)
+        });
         let diagnostics = ctx.diagnostic_recorder();
         let diagnostics = diagnostics.as_deref();
         let mut pass = ctx.begin_tracked_render_pass(colour_pass(
@@ -409,11 +420,25 @@ pub fn volume_passes(
         let span = diagnostics.pass_span(&mut pass, SPLAT_PASS);
         settle.settle(&mut pass);
         pass.set_render_pipeline(splat);
+        if let Some(group) = &fixed_group {
+            pass.set_bind_group(1, group, &[]);
+        }
         for (group, capacity) in &groups {
             pass.set_bind_group(0, group, &[]);
             pass.draw(0..6, 0..*capacity);
         }
         span.end(&mut pass);
+        drop(pass);
+        if let Some((p, accumulator)) = fixed {
+            crate::render::fixed_splat::resolve(
+                &mut ctx,
+                &cache,
+                p,
+                accumulator,
+                &state.target,
+                state.size,
+            );
+        }
     }
     log.record(SPLAT_PASS);
     {

@@ -34,6 +34,7 @@ pub fn raster_source() -> String {
     [
         include_str!("../optics.wgsl"),
         include_str!("common.wgsl"),
+        crate::render::fixed_splat::fragment_source(),
         include_str!("raster.wgsl"),
     ]
     .join("\n")
@@ -79,7 +80,9 @@ pub(super) fn init_volume_pipelines(
     mut commands: Commands,
     shaders: Res<VolumeShaders>,
     cache: Res<PipelineCache>,
+    fixed: Option<Res<crate::render::fixed_splat::FixedSplats>>,
 ) {
+    let fixed = fixed.is_some_and(|f| f.0);
     use binding_types::*;
     let ro = || storage_buffer_read_only_sized(false, None);
     let rw = || storage_buffer_sized(false, None);
@@ -198,9 +201,32 @@ pub(super) fn init_volume_pipelines(
         dst_factor: BlendFactor::One,
         operation: BlendOperation::Add,
     };
+    // Without FLOAT32_BLENDABLE the splats add into fixed-point atomics (group 1) and write
+    // nothing to the target (`render::fixed_splat`).
+    let (layout, entry, blend, write_mask) = if fixed {
+        (
+            vec![
+                splat_layout.clone(),
+                crate::render::fixed_splat::fragment_layout(),
+            ],
+            "fs_splat_fixed",
+            None,
+            ColorWrites::empty(),
+        )
+    } else {
+        (
+            vec![splat_layout.clone()],
+            "fs_splat",
+            Some(BlendState {
+                color: add,
+                alpha: add,
+            }),
+            ColorWrites::ALL,
+        )
+    };
     let splat = cache.queue_render_pipeline(RenderPipelineDescriptor {
         label: Some("caustics:pipeline:volume_splat".into()),
-        layout: vec![splat_layout.clone()],
+        layout,
         vertex: VertexState {
             shader: shaders.raster.clone(),
             entry_point: Some("vs_splat".into()),
@@ -208,14 +234,11 @@ pub(super) fn init_volume_pipelines(
         },
         fragment: Some(FragmentState {
             shader: shaders.raster.clone(),
-            entry_point: Some("fs_splat".into()),
+            entry_point: Some(entry.into()),
             targets: vec![Some(ColorTargetState {
                 format: CAUSTICS_BUFFER_FORMAT,
-                blend: Some(BlendState {
-                    color: add,
-                    alpha: add,
-                }),
-                write_mask: ColorWrites::ALL,
+                blend,
+                write_mask,
             })],
             ..default()
         }),

@@ -120,3 +120,14 @@ fn fs_splat(in: SOut) -> @location(0) vec4<f32> {
     }
     return vec4(in.e, 0.0);
 }
+
+// The splat without float blending: the same value added in fixed point (group 1,
+// src/render/fixed_splat/), nothing written to the target.
+@fragment
+fn fs_splat_fixed(in: SOut) -> @location(0) vec4<f32> {
+    if dot(in.q, in.q) > 1.0 || !depth_visible(in.pos, in.world) {
+        discard;
+    }
+    fixed_splat_add(vec2<u32>(in.pos.xy), textureDimensions(view_depth).x, in.e);
+    return vec4(0.0);
+}

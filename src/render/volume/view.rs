@@ -48,13 +48,18 @@ pub struct VolumeViewState {
     pub blur: Buffer,
     /// Indices into [`VolumeStore::volumes`] visible here.
     pub visible: Vec<usize>,
+    /// The fixed-point accumulator of the splats, without `FLOAT32_BLENDABLE`
+    /// (`render::fixed_splat`).
+    pub fixed: Option<Buffer>,
 }
 
 impl VolumeViewState {
     /// GPU bytes held (`render::memory`).
     pub fn gpu_bytes(&self) -> u64 {
         crate::render::memory::texture_bytes(self.target.texture())
-            + crate::render::memory::buffer_bytes([&self.params, &self.blur])
+            + crate::render::memory::buffer_bytes(
+                [&self.params, &self.blur].into_iter().chain(&self.fixed),
+            )
     }
 }
 
@@ -115,6 +120,7 @@ pub fn prepare_volumes(
     scene: Option<Res<ExtractedCausticsScene>>,
     mut store: ResMut<VolumeStore>,
     limits: Res<crate::limits::CausticsLimits>,
+    fixed: Option<Res<crate::render::fixed_splat::FixedSplats>>,
     mut views: Query<(
         Entity,
         &ExtractedCaustics,
@@ -123,6 +129,7 @@ pub fn prepare_volumes(
         Option<&mut VolumeViewState>,
     )>,
 ) {
+    let fixed = fixed.is_some_and(|f| f.0);
     let cams: Vec<(Entity, Mat4, Vec3)> = views
         .iter()
         .filter(|(_, c, cam, ..)| {
@@ -271,7 +278,7 @@ pub fn prepare_volumes(
         let state = match state {
             Some(s) if s.size == size => s.into_inner(),
             _ => {
-                fresh = Some(new_view_state(&device, size));
+                fresh = Some(new_view_state(&device, size, fixed));
                 fresh.as_mut().unwrap()
             }
         };
@@ -307,12 +314,18 @@ pub fn prepare_volumes(
     }
 }
 
-fn new_view_state(device: &RenderDevice, size: UVec2) -> VolumeViewState {
+fn new_view_state(device: &RenderDevice, size: UVec2, fixed: bool) -> VolumeViewState {
+    // Storage: the fixed-point fallback's resolve writes it.
+    let storage = if fixed {
+        TextureUsages::STORAGE_BINDING
+    } else {
+        TextureUsages::empty()
+    };
     let target = crate::render::view_texture(
         device,
         "caustics:texture:volume_splats",
         size,
-        TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING,
+        TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING | storage,
     )
     .create_view(&TextureViewDescriptor::default());
     let uniform = |label: &'static str, size: u64| {
@@ -329,5 +342,8 @@ fn new_view_state(device: &RenderDevice, size: UVec2) -> VolumeViewState {
         params: uniform("caustics:buffer:volume_view", 144),
         blur: uniform("caustics:buffer:volume_blur", 16),
         visible: Vec::new(),
+        fixed: fixed.then(|| {
+            crate::render::fixed_splat::accumulator(device, "caustics:volume:fixed_splats", size)
+        }),
     }
 }
