@@ -342,7 +342,7 @@ fn update_volume(
 }
 
 /// All volume passes of one view.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn volume_passes(
     view: ViewQuery<(
         Entity,
