@@ -6,12 +6,13 @@
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
 //!     [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]
-//!     [--stereo METRES] [--webgpu-limits] [--without FEATURE,...]
+//!     [--stereo METRES] [--webgpu-limits] [--without FEATURE,...] [--settle-frames N]
 //! ```
 //!
 //! `--webgpu-limits` starts the device with WebGPU's default limits; `--without` leaves
 //! adapter features off it (`float32_blendable`, `texture_adapter_specific_format_features`),
-//! to try the fallbacks a browser may need.
+//! to try the fallbacks a browser may need. `--settle-frames` sets `Caustics::settle_frames`
+//! (default 16; 0: every frame runs the technique).
 //!
 //! The scene path is relative to the working directory (its buffers and images to the glTF's
 //! folder). Errors (missing or unreadable file, no camera, no lights, no adapter, bad option, a
@@ -85,6 +86,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
                 job.stereo = Some(sep);
             }
             "--frames" => job.frames = num(v, a)?.min(u32::MAX as u64) as u32,
+            "--settle-frames" => job.settle_frames = num(v, a)?.min(u32::MAX as u64) as u32,
             "--seed" => job.seed = num(v, a)?,
             "--ev100" => {
                 let t = v.ok_or("--ev100 needs a value")?;
@@ -260,7 +262,7 @@ fn parse(args: &[String]) -> Result<(RenderJob, Outputs), String> {
         }
         i += 2;
     }
-    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES] [--webgpu-limits] [--without FEATURE,...]")?;
+    job.scene = scene.ok_or("usage: render SCENE.gltf [--technique reference|aaps|volume|image_space|photon_map] [--width N] [--height N] [--out-exr F] [--out-png F] [--json F] [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...] [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...] [--stereo METRES] [--webgpu-limits] [--without FEATURE,...] [--settle-frames N]")?;
     Ok((job, out))
 }
 

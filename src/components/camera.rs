@@ -27,6 +27,13 @@ pub struct Caustics {
     pub debug_view: CausticsDebugView,
     /// Seed of the random streams of stochastic techniques. Default 1. Any value.
     pub seed: u64,
+    /// Frames in a row in which nothing the caustics depend on changed (the scene's lights,
+    /// casters, receivers and materials, the camera, the size, the settings) after which the
+    /// view keeps its caustics buffer and dispatches nothing until something changes. Default
+    /// 16 (AAPS's task buffer has settled by then, so what it keeps is what it would trace
+    /// again). 0: every frame runs its technique. Costs nothing; a still frame then costs only
+    /// the composite. The photon map's progressive mean freezes by its own `max_frames`.
+    pub settle_frames: u32,
 }
 
 impl Default for Caustics {
@@ -36,6 +43,7 @@ impl Default for Caustics {
             quality: CausticsQuality::Medium,
             debug_view: CausticsDebugView::Off,
             seed: 1,
+            settle_frames: 16,
         }
     }
 }

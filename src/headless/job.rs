@@ -92,6 +92,8 @@ pub struct RenderJob {
     /// Technique `volume`: the settings of the volumes fitted around the casters (one per
     /// light) when the scene declares none; its box and faces are ignored.
     pub volume: crate::CausticsVolume,
+    /// [`crate::Caustics::settle_frames`] of the camera. Default 16 (the component's default).
+    pub settle_frames: u32,
     /// Start the renderer with WebGPU's default limits (`WgpuLimits::default()`: 8 storage
     /// buffers and 4 storage textures per stage, 128 MiB bindings) instead of the adapter's
     /// own. Default false.
@@ -127,6 +129,7 @@ impl Default for RenderJob {
             stereo: None,
             every_frame: false,
             volume: Default::default(),
+            settle_frames: 16,
             webgpu_limits: false,
             disabled_features: bevy::render::settings::WgpuFeatures::empty(),
         }
@@ -667,6 +670,7 @@ fn spawn_cameras(
                 CausticsQuality::Custom { photons }
             }),
             seed: job.seed,
+            settle_frames: job.settle_frames,
             ..default()
         };
     let exposure = job_exposure(job);

@@ -12,6 +12,7 @@ pub mod image_space;
 pub mod memory;
 pub mod photon_map;
 pub mod readback;
+pub mod settle;
 pub mod span;
 pub mod trace;
 pub mod volume;
@@ -83,6 +84,8 @@ pub struct ExtractedCaustics {
     pub hidden: bool,
     /// The reference image to upload, with its serial.
     pub reference: Option<(Arc<CausticImage>, u64)>,
+    /// [`Caustics::settle_frames`].
+    pub settle_frames: u32,
 }
 
 impl SyncComponent for Caustics {
@@ -127,6 +130,7 @@ impl ExtractComponent for Caustics {
             white_albedo: c.debug_view == CausticsDebugView::WhiteAlbedo,
             hidden: c.debug_view == CausticsDebugView::Hidden,
             reference,
+            settle_frames: c.settle_frames,
         })
     }
 }
@@ -290,6 +294,9 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     };
     render_app.insert_resource(log).add_systems(
         Render,
-        prepare_caustics_buffers.in_set(RenderSystems::PrepareResources),
+        (
+            settle::track_settle.in_set(RenderSystems::PrepareViews),
+            prepare_caustics_buffers.in_set(RenderSystems::PrepareResources),
+        ),
     );
 }

@@ -190,13 +190,17 @@ type Dirty<'w, 's> = (
         'w,
         's,
         (),
-        Or<(
-            Changed<Mesh3d>,
-            Changed<MeshMaterial3d<StandardMaterial>>,
-            Changed<CausticMaterial>,
-            Changed<GlobalTransform>,
-            Changed<InheritedVisibility>,
-        )>,
+        (
+            // Meshes only: a camera that moves changes no caustic.
+            With<Mesh3d>,
+            Or<(
+                Changed<Mesh3d>,
+                Changed<MeshMaterial3d<StandardMaterial>>,
+                Changed<CausticMaterial>,
+                Changed<GlobalTransform>,
+                Changed<InheritedVisibility>,
+            )>,
+        ),
     >,
     Query<
         'w,

@@ -390,6 +390,7 @@ pub fn prepare_aaps_views(
         &ExtractedCamera,
         &ExtractedView,
         Option<&mut AapsViewState>,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
 ) {
     // Left eyes of stereo pairs that run AAPS, by pair.
@@ -401,7 +402,7 @@ pub fn prepare_aaps_views(
             Some((s.pair, entity))
         })
         .collect();
-    for (entity, caustics, camera, view, state) in &mut views {
+    for (entity, caustics, camera, view, state, settle) in &mut views {
         let mut e = commands.entity(entity);
         match caustics
             .stereo
@@ -423,6 +424,12 @@ pub fn prepare_aaps_views(
             if state.is_some() && caustics.technique != CausticsTechnique::Aaps {
                 e.remove::<AapsViewState>();
             }
+            continue;
+        }
+        // Nothing changed for `settle_frames` frames: the task buffer has settled and the
+        // caustics buffer holds what a new trace would give (`render::settle`).
+        if state.is_some() && crate::render::settle::keeps(settle) {
+            e.remove::<AapsFrame>();
             continue;
         }
         let scene = scene.as_ref().unwrap();

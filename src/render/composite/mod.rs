@@ -133,6 +133,7 @@ pub fn composite_caustics(
         Option<&VolumeViewFrame>,
         Option<&ImageSpaceFrame>,
         Option<&PhotonMapFrame>,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,
@@ -140,8 +141,19 @@ pub fn composite_caustics(
     settle: Res<crate::render::span::SpanSettle>,
     mut ctx: RenderContext,
 ) {
-    let (target, prepass, buffer, camera, caustics, id, aaps, volume, image_space, photon_map) =
-        view.into_inner();
+    let (
+        target,
+        prepass,
+        buffer,
+        camera,
+        caustics,
+        id,
+        aaps,
+        volume,
+        image_space,
+        photon_map,
+        view_settle,
+    ) = view.into_inner();
     let (Some(render_pipeline), Some(gbuffer)) =
         (cache.get_render_pipeline(**id), prepass.deferred_view())
     else {
@@ -158,7 +170,7 @@ pub fn composite_caustics(
         CausticsTechnique::ImageSpace => image_space.is_some(),
         // The photon map fills it this frame, or no light reaches a caster.
         CausticsTechnique::PhotonMap => photon_map.is_some(),
-    };
+    } || view_settle.is_some_and(|s| s.kept());
     if !filled || caustics.hidden {
         return;
     }

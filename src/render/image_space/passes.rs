@@ -4,6 +4,8 @@
 //! into the caustics buffer. Each pass records a GPU span and its name in the dispatch log.
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use std::sync::atomic::Ordering;
+
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
@@ -191,17 +193,22 @@ pub fn image_space_passes(
     let (Some(compute), Some(rsm)) = (compute, rsm) else {
         return;
     };
-    rsm_passes(
-        &mut ctx,
-        &settle,
-        state,
-        scene.as_ref(),
-        &pipelines,
-        &cache,
-        &rsm,
-    );
-    for name in RSM_PASSES {
-        log.record(name);
+    // The RSMs only when the scene changed since they were drawn (not on camera moves).
+    let generation = scene.scene.generation;
+    if state.rsm_drawn.load(Ordering::Relaxed) != generation {
+        rsm_passes(
+            &mut ctx,
+            &settle,
+            state,
+            scene.as_ref(),
+            &pipelines,
+            &cache,
+            &rsm,
+        );
+        for name in RSM_PASSES {
+            log.record(name);
+        }
+        state.rsm_drawn.store(generation, Ordering::Relaxed);
     }
     let c = Ctx {
         state,

@@ -446,6 +446,9 @@ pub struct ImageSpaceViewState {
     pub settings: ImageSpaceSettings,
     /// Photons per light this frame.
     pub photons: u32,
+    /// The scene generation the RSMs were last drawn for (`u64::MAX`: never): they depend on
+    /// the lights and the geometry only, so a camera move does not redraw them.
+    pub rsm_drawn: std::sync::atomic::AtomicU64,
 }
 
 impl ImageSpaceViewState {
@@ -567,6 +570,7 @@ impl ImageSpaceViewState {
                 .create_view(&TextureViewDescriptor::default())
         };
         Self {
+            rsm_drawn: std::sync::atomic::AtomicU64::new(u64::MAX),
             key,
             rsm: (rsm, rsm_view),
             rsm_layers,
@@ -673,10 +677,11 @@ pub fn prepare_image_space_views(
         &ExtractedCamera,
         &ExtractedView,
         Option<&mut ImageSpaceViewState>,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
 ) {
     let limits = limits.map(|l| l.clone()).unwrap_or_default();
-    for (entity, caustics, camera, view, state) in &mut views {
+    for (entity, caustics, camera, view, state, settle) in &mut views {
         let size = camera.physical_viewport_size.unwrap_or_default();
         let active = caustics.technique == CausticsTechnique::ImageSpace
             && size.x > 0
@@ -687,6 +692,12 @@ pub fn prepare_image_space_views(
             if state.is_some() && caustics.technique != CausticsTechnique::ImageSpace {
                 commands.entity(entity).remove::<ImageSpaceViewState>();
             }
+            continue;
+        }
+        // Nothing changed for `settle_frames` frames: keep the denoised result
+        // (`render::settle`).
+        if state.is_some() && crate::render::settle::keeps(settle) {
+            commands.entity(entity).remove::<ImageSpaceFrame>();
             continue;
         }
         let scene = scene.as_ref().unwrap();

@@ -96,6 +96,8 @@ pub struct PhotonMapViewState {
     pub traces: bool,
     /// A 16-byte buffer bound where a view has no left eye's mean to read.
     pub dummy: Buffer,
+    /// The frozen mean is in the caustics buffer: later frozen frames dispatch nothing.
+    pub frozen_shown: bool,
     accumulating: Option<Accumulating>,
 }
 
@@ -178,6 +180,7 @@ impl PhotonMapViewState {
             serial: 0,
             radius: 0.0,
             traces: false,
+            frozen_shown: false,
             dummy: buffer("caustics:photon_map:dummy", 16, storage),
             accumulating: None,
         }
@@ -206,6 +209,7 @@ pub fn prepare_photon_map_views(
         &ExtractedCamera,
         &ExtractedView,
         Option<&mut PhotonMapViewState>,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
 ) {
     let limits = limits.map(|l| l.clone()).unwrap_or_default();
@@ -213,7 +217,7 @@ pub fn prepare_photon_map_views(
     let lefts: std::collections::HashMap<u32, LeftEye> = views
         .iter()
         .filter(|(_, c, ..)| c.technique == CausticsTechnique::PhotonMap)
-        .filter_map(|(entity, c, _, view, _)| {
+        .filter_map(|(entity, c, _, view, ..)| {
             let s = c.stereo.filter(|s| s.eye == crate::StereoEye::Left)?;
             let left = LeftEye {
                 entity,
@@ -223,7 +227,7 @@ pub fn prepare_photon_map_views(
             Some((s.pair, left))
         })
         .collect();
-    for (entity, caustics, camera, view, state) in &mut views {
+    for (entity, caustics, camera, view, state, settle) in &mut views {
         let mut e = commands.entity(entity);
         let size = camera.physical_viewport_size.unwrap_or_default();
         let mine = caustics.technique == CausticsTechnique::PhotonMap;
@@ -273,9 +277,26 @@ pub fn prepare_photon_map_views(
         };
         if state.accumulating.as_ref() != Some(&now) {
             state.frame = 0;
+            state.frozen_shown = false;
             state.accumulating = Some(now);
         }
         let frozen = settings.progressive && state.frame >= settings.max_frames;
+        // Work follows change (`render::settle`): a frozen mean already shown, or without
+        // progressive mode nothing changed for `settle_frames` frames: the caustics buffer
+        // keeps it.
+        let kept = if settings.progressive {
+            frozen && state.frozen_shown && settle.is_some()
+        } else {
+            crate::render::settle::keeps(settle)
+        };
+        if kept {
+            if let Some(s) = settle {
+                s.mark_kept();
+            }
+            e.remove::<PhotonMapFrame>();
+            continue;
+        }
+        state.frozen_shown = frozen;
         if !frozen {
             state.frame = if settings.progressive {
                 state.frame + 1

@@ -350,6 +350,7 @@ pub fn volume_passes(
         &ViewPrepassTextures,
         &VolumeViewState,
         &VolumeViewFrame,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
     store: Res<VolumeStore>,
     pipelines: Res<VolumePipelines>,
@@ -359,7 +360,13 @@ pub fn volume_passes(
     fixed: Option<Res<crate::render::fixed_splat::FixedSplatPipelines>>,
     mut ctx: RenderContext,
 ) {
-    let (entity, buffer, prepass, state, _) = view.into_inner();
+    let (entity, buffer, prepass, state, _, view_settle) = view.into_inner();
+    // Work follows change (`render::settle`): no volume updates and nothing else changed for
+    // `settle_frames` frames: the caustics buffer keeps the last splats.
+    let updating = store.volumes.iter().any(|v| v.run.is_some() && v.visible);
+    if !updating && crate::render::settle::keeps(view_settle) {
+        return;
+    }
     // Fixed-point splats (no FLOAT32_BLENDABLE): the accumulator and its resolve.
     let fixed = match (&state.fixed, fixed.as_deref()) {
         (Some(accumulator), Some(p)) => Some((p, accumulator)),

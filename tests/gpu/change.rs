@@ -1,0 +1,244 @@
+//! Work follows change (issue 16 item 1, `render::settle`): one run per technique on
+//! `glass_sphere` (32², `settle_frames` 2) changes one thing at a time and checks the dispatch
+//! log of the frames around each change against the technique's table (module docs, README):
+//! nothing runs on a still frame once settled; a camera move, a light move, a caster move, a
+//! receiver move and a material change each re-run what they must, and only that.
+
+use std::collections::BTreeSet;
+
+use bevy::prelude::*;
+use bevy_caustics::headless::{RenderJob, run};
+use bevy_caustics::{Caustics, CausticsTechnique as T, PhotonMapSettings};
+
+use super::{GPU, require_gpu, scene};
+
+/// The frames of the changes, in this order (each followed by still frames).
+const EVENTS: [(u32, &str); 5] = [
+    (6, "camera moved"),
+    (12, "light moved"),
+    (18, "caster moved"),
+    (24, "receiver moved"),
+    (30, "material changed"),
+];
+const FRAMES: u32 = 36;
+
+fn script(world: &mut World, n: u32) {
+    let mut named = |name: &str, f: &dyn Fn(&mut Transform)| {
+        let mut q = world.query::<(&Name, &mut Transform)>();
+        for (nm, mut t) in q.iter_mut(world) {
+            if nm.as_str() == name {
+                f(&mut t);
+            }
+        }
+    };
+    match n {
+        6 => {
+            let mut q = world.query_filtered::<&mut Transform, With<Caustics>>();
+            for mut t in q.iter_mut(world) {
+                t.translation.x += 0.02;
+            }
+        }
+        12 => {
+            let mut q = world.query_filtered::<&mut Transform, With<DirectionalLight>>();
+            for mut t in q.iter_mut(world) {
+                t.rotate_x(0.01);
+            }
+        }
+        18 => named("ball", &|t| t.translation.x += 0.02),
+        24 => named("floor", &|t| t.translation.y -= 0.01),
+        30 => {
+            // The glass ball's material (the transmissive one).
+            let handles: Vec<Handle<StandardMaterial>> = world
+                .query::<&MeshMaterial3d<StandardMaterial>>()
+                .iter(world)
+                .map(|m| m.0.clone())
+                .collect();
+            let mut materials = world.resource_mut::<Assets<StandardMaterial>>();
+            for h in handles {
+                if materials
+                    .get(&h)
+                    .is_some_and(|m| m.specular_transmission > 0.0)
+                    && let Some(mut m) = materials.get_mut(&h)
+                {
+                    m.ior = 1.45;
+                }
+            }
+        }
+        _ => {}
+    }
+}
+
+/// The technique's passes (without the `caustics/<technique>/` prefix) of one frame.
+fn passes(frame: &[String], technique: T) -> BTreeSet<String> {
+    let prefix = format!("caustics/{}/", technique.name());
+    frame
+        .iter()
+        .filter_map(|p| p.strip_prefix(&prefix))
+        .map(|p| p.chars().filter(|c| !c.is_ascii_digit()).collect())
+        .collect()
+}
+
+/// What ran for `technique` in the frames after each change, and on the still frame before
+/// it. The dispatch log of frame `n` holds what the render world ran two frames earlier
+/// (pipelined rendering), so a change made at frame `n` shows in the log from `n + 2`; the
+/// window is three frames wide, more than `settle_frames` (2) frames of work.
+fn table(technique: T) -> Vec<(&'static str, BTreeSet<String>, BTreeSet<String>)> {
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        technique,
+        width: 32,
+        height: 32,
+        photons: Some(4096),
+        frames: FRAMES,
+        settle_frames: 2,
+        per_frame: Some(script),
+        photon_map: PhotonMapSettings {
+            max_frames: 2,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+    .expect("render");
+    let f = &report.frame_passes;
+    assert_eq!(f.len(), FRAMES as usize);
+    if std::env::var("CHANGE_DEBUG").is_ok() {
+        for (n, p) in f.iter().enumerate() {
+            println!("{technique:?} frame {n}: {:?}", passes(p, technique));
+        }
+    }
+    EVENTS
+        .iter()
+        .map(|&(n, what)| {
+            let n = n as usize;
+            let still = passes(&f[n - 1], technique);
+            let mut changed = BTreeSet::new();
+            for frame in &f[n + 1..=n + 3] {
+                changed.extend(passes(frame, technique));
+            }
+            println!(
+                "{:?} | {what} | before: {still:?} | ran: {changed:?}",
+                technique
+            );
+            (what, still, changed)
+        })
+        .collect()
+}
+
+fn set(names: &[&str]) -> BTreeSet<String> {
+    names.iter().map(|s| s.to_string()).collect()
+}
+
+/// Every row of every technique's table.
+#[test]
+fn work_follows_change() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let aaps_all = set(&["task_buffer", "trace", "splat_msaa", "splat", "update"]);
+    let image_all = set(&[
+        "rsm_opaque",
+        "rsm_front",
+        "rsm_back",
+        "hiz",
+        "trace",
+        "resolve",
+        "temporal",
+        "variance",
+        "atrous",
+    ]);
+    let image_camera = set(&["hiz", "trace", "resolve", "temporal", "variance", "atrous"]);
+    let map_all = set(&["trace", "grid", "gather"]);
+    let volume_all = set(&[
+        "slab_gbuffer",
+        "slab",
+        "projector_gbuffer",
+        "project",
+        "splat",
+        "blur",
+    ]);
+    let volume_camera = set(&["splat", "blur"]);
+    // The floor lies below the slabs: only the exit-face projectors see it.
+    let volume_receiver = set(&["projector_gbuffer", "project", "splat", "blur"]);
+    let expected = |t: T, what: &str| -> BTreeSet<String> {
+        let camera = what == "camera moved";
+        let receiver = what == "receiver moved";
+        match t {
+            T::Aaps => aaps_all.clone(),
+            T::ImageSpace if camera => image_camera.clone(),
+            T::ImageSpace => image_all.clone(),
+            T::PhotonMap => map_all.clone(),
+            T::Volume if camera => volume_camera.clone(),
+            T::Volume if receiver => volume_receiver.clone(),
+            T::Volume => volume_all.clone(),
+            T::Reference => BTreeSet::new(),
+        }
+    };
+    for technique in [T::Aaps, T::ImageSpace, T::PhotonMap, T::Volume] {
+        for (what, still, ran) in table(technique) {
+            assert!(
+                still.is_empty(),
+                "{technique:?}: a still frame before '{what}' ran {still:?}"
+            );
+            assert_eq!(
+                ran,
+                expected(technique, what),
+                "{technique:?}: '{what}' ran {ran:?}"
+            );
+        }
+    }
+}
+
+/// AAPS keeps what it would trace again: its photons are a deterministic function of the task
+/// buffer, and on a still camera the task buffer settles (the variance term is zero). With
+/// `settle_frames` 0 (every frame traced), `glass_sphere` at 32²: every frame from 16 (the
+/// default `settle_frames`) to 24 against frame 16: the same within float summation order
+/// (largest pixel difference ≤ 1e-5 of the peak, energy within 1e-5).
+#[test]
+fn aaps_keeps_what_it_would_trace_again() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        technique: T::Aaps,
+        width: 32,
+        height: 32,
+        photons: Some(1 << 14),
+        frames: 24,
+        settle_frames: 0,
+        every_frame: true,
+        ..Default::default()
+    })
+    .expect("render");
+    let frames = &report.frame_caustics;
+    let kept = &frames[16];
+    let peak = kept
+        .data
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0f32, f32::max);
+    let total = |i: &bevy_caustics::reference::CausticImage| {
+        let s = i.sum();
+        s.x + s.y + s.z
+    };
+    for (k, f) in frames.iter().enumerate().skip(16) {
+        let diff = f
+            .data
+            .iter()
+            .zip(&kept.data)
+            .map(|(a, b)| (*a - *b).abs().max_element())
+            .fold(0.0f32, f32::max);
+        println!(
+            "frame {k}: energy {:+.5} % vs frame 16, largest pixel difference {:.3e} of the peak",
+            100.0 * (total(f) - total(kept)) / total(kept),
+            diff / peak
+        );
+        assert!(diff <= 1e-5 * peak, "frame {k}: {diff} of {peak}");
+        assert!(
+            ((total(f) - total(kept)) / total(kept)).abs() <= 1e-5,
+            "frame {k}"
+        );
+    }
+}
