@@ -1,7 +1,8 @@
 //! Criterion benchmarks: the optics core, BVH build and traversal, the reference tracer
 //! (photons per second), the main-world CPU cost of a frame for 1, 10 and 100 casters of which
 //! one moves and for 1, 100 and 1000 still ones (against the same app without the plugin), the
-//! photon map's CPU baselines (seed 001 tables 1 and 2: a kd-tree against the hash grid, a
+//! render-world CPU cost of a still frame for 1, 100 and 1000 casters (the renderer on the
+//! adapter, lavapipe in CI), the photon map's CPU baselines (seed 001 tables 1 and 2: a kd-tree against the hash grid, a
 //! k-nearest max-heap against all photons within the radius).
 //!
 //! `cargo bench --bench caustics` (release profile). Under `cargo test` each runs once.
@@ -212,6 +213,131 @@ fn bench_frame_cpu_static(c: &mut Criterion) {
     g.finish();
 }
 
+/// An app with the renderer (headless, the camera rendering into a 32² image) and the plugin,
+/// `n` glass balls in a row over a floor, a sun and a still AAPS camera, after 40 frames: the
+/// view has settled (`Caustics::settle_frames` 16) and keeps its caustics buffer. `None` when
+/// there is no adapter.
+fn render_app(n: usize) -> Option<App> {
+    use bevy::asset::RenderAssetUsages;
+    use bevy::camera::RenderTarget;
+    use bevy::render::RenderPlugin;
+    use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
+    use bevy::window::ExitCondition;
+    bevy_caustics::headless::find_adapter().ok()?;
+    let mut app = App::new();
+    app.add_plugins(
+        DefaultPlugins
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .disable::<bevy::winit::WinitPlugin>()
+            // The render world stays a sub-app the benchmark can reach.
+            .disable::<bevy::render::pipelined_rendering::PipelinedRenderingPlugin>(),
+    )
+    .add_plugins(bevy_caustics::CausticsPlugin);
+    app.finish();
+    app.cleanup();
+    let w = app.world_mut();
+    let mut image = Image::new_fill(
+        Extent3d {
+            width: 32,
+            height: 32,
+            depth_or_array_layers: 1,
+        },
+        TextureDimension::D2,
+        &[0u8; 4],
+        TextureFormat::Rgba8UnormSrgb,
+        RenderAssetUsages::default(),
+    );
+    image.texture_descriptor.usage |= TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC;
+    let target = w.resource_mut::<Assets<Image>>().add(image);
+    let ball = w
+        .resource_mut::<Assets<Mesh>>()
+        .add(Sphere::new(0.4).mesh().uv(16, 8));
+    let floor = w
+        .resource_mut::<Assets<Mesh>>()
+        .add(Plane3d::default().mesh().size(4.0 * n as f32 + 4.0, 6.0));
+    let glass = w
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial {
+            specular_transmission: 1.0,
+            ior: 1.5,
+            perceptual_roughness: 0.0,
+            ..default()
+        });
+    let grey = w
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::from(Color::srgb(0.6, 0.6, 0.6)));
+    for i in 0..n {
+        w.spawn((
+            Mesh3d(ball.clone()),
+            MeshMaterial3d(glass.clone()),
+            Transform::from_xyz(i as f32, 1.0, 0.0),
+        ));
+    }
+    w.spawn((Mesh3d(floor), MeshMaterial3d(grey)));
+    w.spawn((
+        DirectionalLight {
+            illuminance: 10_000.0,
+            ..default()
+        },
+        Transform::default().looking_to(Vec3::new(0.2, -1.0, 0.1), Vec3::Y),
+        bevy_caustics::CausticLight::default(),
+    ));
+    w.spawn((
+        Camera3d::default(),
+        RenderTarget::Image(target.into()),
+        Msaa::Off,
+        bevy_caustics::Caustics {
+            quality: bevy_caustics::CausticsQuality::Custom { photons: 4096 },
+            ..default()
+        },
+        Transform::from_xyz(0.0, 3.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    for _ in 0..40 {
+        app.update();
+    }
+    Some(app)
+}
+
+/// Render-world CPU cost of a still frame (issue 16 item 4): the plugin's render-world systems
+/// of a frame (`render::add_frame_systems_for_bench`: settle tracking, buffers, scene uploads,
+/// every technique's view preparation, pipeline variants, the memory count; not the extraction
+/// and not the passes, of which a settled view runs only the composite) on the render world of
+/// a renderer that has drawn 40 frames of a still scene with 1, 100 and 1000 casters.
+fn bench_frame_cpu_render_static(c: &mut Criterion) {
+    let mut g = c.benchmark_group("frame_cpu_render_static");
+    for n in [1usize, 100, 1000] {
+        let Some(mut app) = render_app(n) else {
+            eprintln!("frame_cpu_render_static: no GPU adapter, skipped");
+            return;
+        };
+        let mut schedule = bevy::ecs::schedule::Schedule::default();
+        schedule.set_executor(bevy::ecs::schedule::SingleThreadedExecutor::new());
+        bevy_caustics::render::add_frame_systems_for_bench(&mut schedule);
+        let world = app
+            .get_sub_app_mut(bevy::render::RenderApp)
+            .expect("render app")
+            .world_mut();
+        let views = world
+            .query::<&bevy_caustics::render::settle::ViewSettle>()
+            .iter(world)
+            .filter(|s| s.keep)
+            .count();
+        assert_eq!(views, 1, "the view has not settled");
+        g.bench_function(format!("{n}_casters_still"), |b| {
+            b.iter(|| schedule.run(world))
+        });
+    }
+    g.finish();
+}
+
 /// A caustic-like photon set on a 2 m x 2 m floor: half uniform, half in a focus (a Gaussian
 /// of 0.1 m), the way a glass ball's photons land.
 fn photon_set(n: usize, seed: u64) -> Vec<glam::Vec3> {
@@ -378,6 +504,7 @@ criterion_group!(
     bench_tracer,
     bench_frame_cpu,
     bench_frame_cpu_static,
+    bench_frame_cpu_render_static,
     bench_photon_map_table1,
     bench_photon_map_table2
 );

@@ -68,7 +68,9 @@ pub struct AapsSettings {
     /// 4-splat guard region, so the buffer fits a 128 MiB storage binding (WebGPU's default).
     /// At most what one storage binding of the GPU holds
     /// ([`crate::limits::CausticsLimits::max_splat_capacity`]), clamped with a warning.
-    /// Splats past it are counted as overflow and not drawn.
+    /// Splats past it are counted as overflow and not drawn. The buffer holds no more than
+    /// twice the photons the view can trace (a photon splits once), so at the default budgets
+    /// it is far smaller.
     #[reflect(@1_u32..=16_777_216_u32)]
     pub splat_capacity: u32,
     /// Share of the frame's photon budget spread evenly over the texels whose photons reached

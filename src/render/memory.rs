@@ -87,7 +87,7 @@ pub fn buffer_bytes<'a>(buffers: impl IntoIterator<Item = &'a Buffer>) -> u64 {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn measure(
+pub(crate) fn measure(
     memory: Res<CausticsGpuMemory>,
     buffers: Query<&ViewCausticsBuffer>,
     trace: Option<Res<TraceSceneBuffers>>,

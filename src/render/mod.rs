@@ -185,6 +185,35 @@ pub(crate) fn view_texture(
     })
 }
 
+/// The plugin's render-world systems of one frame, outside extraction and the passes: settle
+/// tracking, the caustics buffers, the scene uploads, every technique's view preparation and
+/// pipeline variants, the volume gizmos, the composite's pipeline and the memory count, in
+/// their schedule order. The CPU benchmark (`frame_cpu_render_static`) runs this on a render
+/// world after the renderer's own frames; the plugin adds the same systems to `Render`.
+#[doc(hidden)]
+pub fn add_frame_systems_for_bench(schedule: &mut bevy::ecs::schedule::Schedule) {
+    schedule.add_systems(
+        (
+            settle::track_settle,
+            prepare_caustics_buffers,
+            trace::prepare_trace_scene,
+            aaps::view::prepare_aaps_views,
+            aaps::pipelines::queue_aaps_trace_variant,
+            image_space::view::prepare_image_space_scene,
+            image_space::view::prepare_image_space_views,
+            photon_map::pipelines::queue_photon_map_pipelines,
+            photon_map::pipelines::queue_photon_map_trace_variant,
+            photon_map::view::prepare_photon_map_views,
+            volume::pipelines::queue_volume_pipelines,
+            volume::view::prepare_volumes,
+            volume::gizmo::prepare_volume_gizmos,
+            composite::prepare_composite_pipelines,
+            memory::measure,
+        )
+            .chain(),
+    );
+}
+
 /// Create (or resize) each caustics view's buffer and upload a new reference image.
 pub(crate) fn prepare_caustics_buffers(
     mut commands: Commands,

@@ -7,6 +7,18 @@
 //! atlas, emit + trace (indirect dispatch sized on the GPU), splat (indirect draws, small-splat
 //! MSAA), variance by reprojection and the density update. Nothing is dispatched for a view
 //! whose technique is not `Aaps`, or when no caustic light reaches a caster.
+//!
+//! **Work follows change** (`render::settle`; the dispatch log of each row is checked by
+//! `tests/gpu/change.rs`):
+//!
+//! | what changed | what re-runs |
+//! | --- | --- |
+//! | nothing, for `Caustics::settle_frames` frames | nothing: the caustics buffer keeps the last result, which a new trace would repeat (the task buffer has settled; its photons are a deterministic function of it) |
+//! | the camera moved | task buffer, trace, splats, density update (culling, splat sizes and the task buffer's variance follow the view) |
+//! | a light moved | everything |
+//! | a caster moved | everything |
+//! | a receiver moved | everything |
+//! | a material changed | everything |
 
 pub mod passes;
 pub mod pipelines;

@@ -89,7 +89,7 @@ pub fn trace_descriptor(
 }
 
 /// Queue the `trace` variant the uploaded scene needs (in `PrepareResources`).
-pub(super) fn queue_aaps_trace_variant(
+pub(crate) fn queue_aaps_trace_variant(
     mut pipelines: ResMut<AapsPipelines>,
     shaders: Res<AapsShaders>,
     cache: Res<PipelineCache>,

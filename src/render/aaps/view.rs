@@ -32,6 +32,16 @@ pub fn splat_capacity(requested: u32, limits: &bevy::render::render_resource::Wg
     (requested as u64).clamp(1, max) as u32
 }
 
+/// Photons a view traces at most: the budget of every light plus the minimum density of every
+/// texel. The budget scaling keeps the total under it, so nothing the task buffer asks for is
+/// ever cut (cut photons would lose energy).
+pub fn photon_capacity(budget_per_light: u64, lights: u32, tile: u32, min_density: f32) -> u32 {
+    let min_sq = crate::optics::floor_square(min_density) as u64;
+    (budget_per_light.saturating_mul(lights as u64)
+        + min_sq * (tile as u64 * tile as u64) * lights as u64)
+        .min(u32::MAX as u64 / 2) as u32
+}
+
 /// Stride of the per-level quadtree uniforms (the minimum uniform offset alignment).
 pub const LEVEL_STRIDE: u64 = 256;
 
@@ -218,13 +228,9 @@ impl AapsViewState {
             let valid = (y / tile) * per_row + x / tile < lights && x / tile < per_row;
             density.extend_from_slice(&(if valid { start } else { 0.0f32 }).to_le_bytes());
         }
-        let min_sq = crate::optics::floor_square(settings.min_density) as u64;
         let budget = budget_per_light * lights as f64;
-        // The budget scaling keeps the total under budget + the minimum of every texel, so
-        // nothing the task buffer asks for is ever cut (cut photons would lose energy).
-        let photon_capacity = ((budget as u64)
-            + min_sq * (tile as u64 * tile as u64) * lights as u64)
-            .min(u32::MAX as u64 / 2) as u32;
+        let photon_capacity =
+            photon_capacity(key.budget_per_light, lights, tile, settings.min_density);
         let density_buf = device.create_buffer_with_data(&BufferInitDescriptor {
             label: Some("caustics:aaps:density"),
             contents: &density,
@@ -435,11 +441,19 @@ pub fn prepare_aaps_views(
         let scene = scene.as_ref().unwrap();
         let settings = caustics.aaps.sanitized_for(&limits);
         let (atlas, tile, per_row) = atlas_layout(settings.atlas_resolution, scene.lights);
+        let budget_per_light = caustics.photons_per_light.min(limits.max_aaps_photons);
+        // A photon draws at most two splats (it splits once, section 3.3.1), so the splat
+        // buffer never needs more than twice the photons the view can trace.
+        let needed =
+            2 * photon_capacity(budget_per_light, scene.lights, tile, settings.min_density);
         let key = StateKey {
             atlas: [atlas, tile, per_row, scene.lights],
-            splat_capacity: splat_capacity(settings.splat_capacity, &device.limits()),
+            splat_capacity: splat_capacity(
+                settings.splat_capacity.min(needed.max(1)),
+                &device.limits(),
+            ),
             size,
-            budget_per_light: caustics.photons_per_light.min(limits.max_aaps_photons),
+            budget_per_light,
             adaptive: settings.adaptive,
             min_max: [
                 settings.min_density.to_bits(),

@@ -106,7 +106,7 @@ impl SpecializedRenderPipeline for CompositePipeline {
     }
 }
 
-fn prepare_composite_pipelines(
+pub(crate) fn prepare_composite_pipelines(
     mut commands: Commands,
     cache: Res<PipelineCache>,
     pipeline: Res<CompositePipeline>,

@@ -53,6 +53,18 @@
 //! - Casters are ideal specular ([`crate::CausticMaterial`] has no roughness; a
 //!   `StandardMaterial` mirror rougher than 0.2 is already a receiver), so the paper's
 //!   roughness cutoff of 0.3 never applies.
+//!
+//! **Work follows change** (`render::settle`; the dispatch log of each row is checked by
+//! `tests/gpu/change.rs`):
+//!
+//! | what changed | what re-runs |
+//! | --- | --- |
+//! | nothing, for `Caustics::settle_frames` frames | nothing: the caustics buffer keeps the denoised result |
+//! | the camera moved | Hi-Z, trace, resolve, SVGF (temporal, variance, à-trous); the RSMs are kept (they depend on the lights and the geometry only) |
+//! | a light moved | RSMs and everything after them |
+//! | a caster moved | RSMs and everything after them |
+//! | a receiver moved | RSMs and everything after them |
+//! | a material changed | RSMs and everything after them |
 
 pub mod passes;
 pub mod pipelines;

@@ -72,6 +72,18 @@
 //!   neighbourhood; other tiles gather pixel by pixel (`shared_memory`, off by default).
 //! - Photon order within a cell is whatever the atomic scatter gives; sums differ in the last
 //!   bits between runs, the grid's layout and `startIdx` do not (tested exactly).
+//!
+//! **Work follows change** (`render::settle`; the dispatch log of each row is checked by
+//! `tests/gpu/change.rs`):
+//!
+//! | what changed | what re-runs |
+//! | --- | --- |
+//! | nothing | progressive mode: trace, grid and gather each frame until `max_frames`, then one gather copies the frozen mean, then nothing; without it, nothing after `Caustics::settle_frames` frames |
+//! | the camera moved | trace, grid, gather (the progressive mean starts again) |
+//! | a light moved | trace, grid, gather |
+//! | a caster moved | trace, grid, gather |
+//! | a receiver moved | trace, grid, gather |
+//! | a material changed | trace, grid, gather |
 
 pub mod passes;
 pub mod pipelines;

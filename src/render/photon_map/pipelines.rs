@@ -89,7 +89,7 @@ pub struct PhotonMapPipelines {
 /// Queue the pipelines the first time a camera uses the photon map (in `PrepareResources`):
 /// an app that never does compiles none of them (lavapipe's compiler takes seconds for the
 /// tracer module, and every app start paid it before).
-pub(super) fn queue_photon_map_pipelines(
+pub(crate) fn queue_photon_map_pipelines(
     mut commands: Commands,
     shaders: Res<PhotonMapShaders>,
     cache: Res<PipelineCache>,
@@ -185,7 +185,7 @@ pub(super) fn queue_photon_map_pipelines(
 }
 
 /// Queue the `pm_trace` variant the uploaded scene needs (in `PrepareResources`).
-pub(super) fn queue_photon_map_trace_variant(
+pub(crate) fn queue_photon_map_trace_variant(
     pipelines: Option<ResMut<PhotonMapPipelines>>,
     shaders: Res<PhotonMapShaders>,
     cache: Res<PipelineCache>,

@@ -100,7 +100,7 @@ fn init_gizmo_pipeline(
 }
 
 /// The lines of every volume for each gizmo view, written on the GPU.
-fn prepare_volume_gizmos(
+pub(crate) fn prepare_volume_gizmos(
     mut commands: Commands,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,

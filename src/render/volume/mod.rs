@@ -7,6 +7,18 @@
 //! splats and the blur are drawn for every volume camera. Nothing runs for a view whose
 //! technique is not `Volume`, without a volume, without a caustic light, or for a volume
 //! outside every volume camera's frustum.
+//!
+//! **Work follows change** (section 3.5's differential updates and `render::settle`; the
+//! dispatch log of each row is checked by `tests/gpu/change.rs`):
+//!
+//! | what changed | what re-runs |
+//! | --- | --- |
+//! | nothing, for `Caustics::settle_frames` frames | nothing: the caustics buffer keeps the last splats (before that: splat and blur) |
+//! | the camera moved | splat, blur |
+//! | a light moved | every slab, the projectors, splat, blur |
+//! | a caster moved | the slabs from the caster's on, the projectors, splat, blur |
+//! | a receiver moved | the slabs whose G-buffers see it (none for a floor below the slabs), the projectors, splat, blur |
+//! | a material changed | the slabs from its caster's on, the projectors, splat, blur |
 
 pub mod gizmo;
 pub mod gpu;
@@ -17,7 +29,7 @@ pub mod view;
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::pbr::deferred::deferred_lighting;
 use bevy::prelude::*;
-use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
 use bevy::shader::Shader;
 
 use crate::components::CausticsVolume;
@@ -62,11 +74,10 @@ pub(crate) fn build(app: &mut App) {
     render_app
         .insert_resource(shaders)
         .init_resource::<VolumeStore>()
-        .add_systems(RenderStartup, pipelines::init_volume_pipelines)
         .add_systems(ExtractSchedule, extract_volumes)
         .add_systems(
             Render,
-            view::prepare_volumes
+            (pipelines::queue_volume_pipelines, view::prepare_volumes)
                 .in_set(RenderSystems::PrepareResources)
                 .after(super::prepare_caustics_buffers)
                 .after(super::trace::prepare_trace_scene),

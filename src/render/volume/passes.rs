@@ -353,7 +353,7 @@ pub fn volume_passes(
         Option<&crate::render::settle::ViewSettle>,
     )>,
     store: Res<VolumeStore>,
-    pipelines: Res<VolumePipelines>,
+    pipelines: Option<Res<VolumePipelines>>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     settle: Res<SpanSettle>,
@@ -361,6 +361,9 @@ pub fn volume_passes(
     mut ctx: RenderContext,
 ) {
     let (entity, buffer, prepass, state, _, view_settle) = view.into_inner();
+    let Some(pipelines) = pipelines else {
+        return;
+    };
     // Work follows change (`render::settle`): no volume updates and nothing else changed for
     // `settle_frames` frames: the caustics buffer keeps the last splats.
     let updating = store.volumes.iter().any(|v| v.run.is_some() && v.visible);

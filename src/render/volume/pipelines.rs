@@ -76,12 +76,23 @@ pub struct VolumePipelines {
     pub blur: CachedRenderPipelineId,
 }
 
-pub(super) fn init_volume_pipelines(
+/// Queue the pipelines the first time a camera uses volumes (in `PrepareResources`): an app
+/// that never does creates none of them.
+pub(crate) fn queue_volume_pipelines(
     mut commands: Commands,
     shaders: Res<VolumeShaders>,
     cache: Res<PipelineCache>,
     fixed: Option<Res<crate::render::fixed_splat::FixedSplats>>,
+    existing: Option<Res<VolumePipelines>>,
+    views: Query<&crate::render::ExtractedCaustics>,
 ) {
+    if existing.is_some()
+        || !views
+            .iter()
+            .any(|c| c.technique == crate::CausticsTechnique::Volume)
+    {
+        return;
+    }
     let fixed = fixed.is_some_and(|f| f.0);
     use binding_types::*;
     let ro = || storage_buffer_read_only_sized(false, None);
