@@ -82,8 +82,9 @@ fn switching_techniques_frees_their_memory() {
     assert!(report.caustics.expect("caustics").all_finite());
 }
 
-/// `mirror_wall` (a mirror and a sun: no dielectric, no point light) with AAPS and the photon
-/// map, the trace pipeline specialised (default) and not (`TraceSpecialization(false)`): the
+/// `mirror_wall` (a mirror and a sun: no dielectric, no point light) with AAPS, the photon
+/// map and image space, the trace pipeline specialised (default) and not
+/// (`TraceSpecialization(false)`): the
 /// same caustics (energy within 1e-4, FLIP below 1e-3; AAPS's splats are blended in any
 /// order, so not bit for bit), and the trace pass's GPU time of each, printed for the note.
 #[test]
@@ -100,6 +101,7 @@ fn specialised_tracer_matches_the_general_one() {
     for (technique, pass) in [
         (CausticsTechnique::Aaps, "caustics/aaps/trace"),
         (CausticsTechnique::PhotonMap, "caustics/photon_map/trace"),
+        (CausticsTechnique::ImageSpace, "caustics/image_space/trace"),
     ] {
         let render = |hook: Option<fn(&mut World)>| -> RenderReport {
             run(RenderJob {

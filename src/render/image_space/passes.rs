@@ -167,14 +167,15 @@ pub fn image_space_passes(
         &ImageSpaceFrame,
     )>,
     scene: Option<Res<ImageSpaceScene>>,
-    pipelines: Res<ImageSpacePipelines>,
+    pipelines: Option<Res<ImageSpacePipelines>>,
+    specialization: Option<Res<crate::render::trace::TraceSpecialization>>,
     cache: Res<PipelineCache>,
     log: Res<CausticsDispatchLog>,
     settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
     let (buffer, prepass, state, _) = view.into_inner();
-    let Some(scene) = scene else {
+    let (Some(scene), Some(pipelines)) = (scene, pipelines) else {
         return;
     };
     let (Some(depth), Some(gbuffer)) = (prepass.depth_view(), prepass.deferred_view()) else {
@@ -190,7 +191,15 @@ pub fn image_space_passes(
         .iter()
         .map(|id| cache.get_render_pipeline(*id))
         .collect();
-    let (Some(compute), Some(rsm)) = (compute, rsm) else {
+    // The scene's specialised trace (none this frame while it compiles).
+    let trace = pipelines
+        .trace
+        .get(super::pipelines::trace_features(
+            &scene,
+            specialization.as_deref(),
+        ))
+        .and_then(|id| cache.get_compute_pipeline(id));
+    let (Some(compute), Some(rsm), Some(trace)) = (compute, rsm, trace) else {
         return;
     };
     // The RSMs only when the scene changed since they were drawn (not on camera moves).
@@ -263,12 +272,10 @@ pub fn image_space_passes(
                 dispatches.push(([0, step], [size.x.div_ceil(8), size.y.div_ceil(8), 1]));
             }
         }
-        compute_pass(&mut ctx, &settle, HIZ_PASS, compute[6], &group, &dispatches);
+        compute_pass(&mut ctx, &settle, HIZ_PASS, compute[5], &group, &dispatches);
         log.record(HIZ_PASS);
     }
-    compute_pass(
-        &mut ctx, &settle, TRACE_PASS, compute[0], &group, &per_light,
-    );
+    compute_pass(&mut ctx, &settle, TRACE_PASS, trace, &group, &per_light);
     log.record(TRACE_PASS);
     let parity = (state.frame & 1) as usize;
     let (cur, prev) = (parity, 1 - parity);
@@ -286,7 +293,7 @@ pub fn image_space_passes(
         &mut ctx,
         &settle,
         RESOLVE_PASS,
-        compute[1],
+        compute[0],
         &group,
         &[([0, 0], full)],
     );
@@ -337,7 +344,7 @@ fn svgf_passes(
         ctx,
         c.settle,
         TEMPORAL_PASS,
-        compute[2],
+        compute[1],
         &group,
         &[([0, 0], full)],
     );
@@ -363,7 +370,7 @@ fn svgf_passes(
         ctx,
         c.settle,
         VARIANCE_PASS,
-        compute[3],
+        compute[2],
         &group,
         &[([0, 0], full)],
     );
@@ -400,7 +407,7 @@ fn svgf_passes(
     for (k, stages) in groups.iter().enumerate() {
         let offsets = [0, ((k as u64 + 1) * SMALL_STRIDE) as u32];
         for (j, group) in stages.iter().enumerate() {
-            pass.set_pipeline(compute[4 + j]);
+            pass.set_pipeline(compute[3 + j]);
             pass.set_bind_group(0, group, &offsets);
             pass.dispatch_workgroups(full[0], full[1], full[2]);
         }

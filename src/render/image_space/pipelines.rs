@@ -44,9 +44,8 @@ pub struct ImageSpaceShaders {
     pub rsm: Handle<Shader>,
 }
 
-/// The compute entry points, in [`ImageSpacePipelines::compute`] order.
-pub const COMPUTE_ENTRIES: [&str; 7] = [
-    "trace",
+/// The compute entry points but the trace, in [`ImageSpacePipelines::compute`] order.
+pub const COMPUTE_ENTRIES: [&str; 6] = [
     "resolve",
     "temporal",
     "variance",
@@ -63,16 +62,31 @@ pub struct ImageSpacePipelines {
     /// Group 0 of the RSM passes.
     pub rsm_layout: BindGroupLayoutDescriptor,
     /// [`COMPUTE_ENTRIES`].
-    pub compute: [CachedComputePipelineId; 7],
+    pub compute: [CachedComputePipelineId; 6],
+    /// `trace`, specialised by the scene (`render::trace::TraceFeatures`: without a
+    /// dielectric, no refraction, Fresnel split, caster-back march or Beer-Lambert), queued by
+    /// [`queue_image_space_trace_variant`] the first time a scene needs the variant.
+    pub trace: crate::render::trace::TraceVariants,
     /// Opaque, caster-front and caster-back RSM layers.
     pub rsm: [CachedRenderPipelineId; 3],
 }
 
-pub(super) fn init_image_space_pipelines(
+/// Queue the pipelines the first time a camera uses image space (in `PrepareResources`): an
+/// app that never does compiles none of them.
+pub(crate) fn queue_image_space_pipelines(
     mut commands: Commands,
     shaders: Res<ImageSpaceShaders>,
     cache: Res<PipelineCache>,
+    existing: Option<Res<ImageSpacePipelines>>,
+    views: Query<&crate::render::ExtractedCaustics>,
 ) {
+    if existing.is_some()
+        || !views
+            .iter()
+            .any(|c| c.technique == crate::CausticsTechnique::ImageSpace)
+    {
+        return;
+    }
     use binding_types::*;
     let tex = || texture_2d(TextureSampleType::Float { filterable: false });
     let out = || texture_storage_2d(SVGF_FORMAT, StorageTextureAccess::WriteOnly);
@@ -155,5 +169,47 @@ pub(super) fn init_image_space_pipelines(
         rsm_layout,
         compute,
         rsm,
+        trace: Default::default(),
     });
+}
+
+/// Queue the `trace` variant the scene needs (in `PrepareResources`).
+pub(crate) fn queue_image_space_trace_variant(
+    pipelines: Option<ResMut<ImageSpacePipelines>>,
+    shaders: Res<ImageSpaceShaders>,
+    cache: Res<PipelineCache>,
+    scene: Option<Res<super::view::ImageSpaceScene>>,
+    specialization: Option<Res<crate::render::trace::TraceSpecialization>>,
+) {
+    let (Some(mut pipelines), Some(scene)) = (pipelines, scene) else {
+        return;
+    };
+    let features = trace_features(&scene, specialization.as_deref());
+    let layout = pipelines.compute_layout.clone();
+    pipelines
+        .trace
+        .get_or_queue(features, &cache, |shader_defs| ComputePipelineDescriptor {
+            label: Some("caustics:pipeline:image_space_trace".into()),
+            layout: vec![layout],
+            shader: shaders.compute.clone(),
+            shader_defs,
+            entry_point: Some("trace".into()),
+            ..default()
+        });
+}
+
+/// The trace variant for `scene`: its dielectrics (the light kinds share one code path), or
+/// everything when specialisation is off.
+pub fn trace_features(
+    scene: &super::view::ImageSpaceScene,
+    specialization: Option<&crate::render::trace::TraceSpecialization>,
+) -> crate::render::trace::TraceFeatures {
+    if specialization.is_some_and(|s| !s.0) {
+        crate::render::trace::TraceFeatures::ALL
+    } else {
+        crate::render::trace::TraceFeatures {
+            dielectrics: scene.dielectrics,
+            point_lights: true,
+        }
+    }
 }

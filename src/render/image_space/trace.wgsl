@@ -515,9 +515,14 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let t_max = 4.0 * scale;
     var d = dir_in;
     var inside = false;
+    // Without a dielectric in the scene (shader def TRACE_DIELECTRICS off) every caster is a
+    // mirror: no Fresnel split, refraction, caster-back march or Beer-Lambert is compiled.
+#ifdef TRACE_DIELECTRICS
     if kind == 2u {
+#endif
         d = optics_reflect(dir_in, n);
         flux *= optics_fresnel_schlick(cos_i, mats[3u * inst + 2u].xyz);
+#ifdef TRACE_DIELECTRICS
     } else {
         let ior = max(m0.y, 1.0);
         let fr = optics_fresnel_dielectric(cos_i, 1.0 / ior);
@@ -531,8 +536,10 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             inside = true;
         }
     }
+#endif
     let side = select(n, -n, dot(d, n) < 0.0);
     var o = optics_offset_ray_origin(p, side, scale);
+#ifdef TRACE_DIELECTRICS
     if inside {
         // Inside the medium: the caster-back layer (the exit) and the opaque layer (a receiver
         // inside the medium, e.g. a pool floor), whichever the ray crosses first.
@@ -569,6 +576,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let out_side = select(nb, -nb, dot(d, nb) < 0.0);
         o = optics_offset_ray_origin(to_back.pos, out_side, scale);
     }
+#endif
     let m = march(v, 1u, o, d, t_max);
     atomicAdd(&counters[select(C_LIGHT_MISSES, C_LIGHT_HITS, m.hit)], 1u);
     camera_stage(m.pos, d, flux, m.hit, seed, t_max);

@@ -324,6 +324,8 @@ pub struct ImageSpaceScene {
     pub casters: (Vec3, f32),
     /// The scene's bounding sphere.
     pub bounds: (Vec3, f32),
+    /// Some caster is a dielectric (the trace's variant, `render::trace::TraceFeatures`).
+    pub dielectrics: bool,
 }
 
 /// Build [`ImageSpaceScene`] when the gathered scene changes and a camera uses the technique;
@@ -375,6 +377,10 @@ pub fn prepare_image_space_scene(
         lights: rsm_sources(&lights, casters),
         casters,
         bounds,
+        dielectrics: tlas
+            .instances
+            .iter()
+            .any(|i| matches!(i.surface, crate::scene::Surface::Dielectric { .. })),
     });
     *idle = None;
 }
