@@ -158,7 +158,7 @@ fn compute_pass(
 }
 
 /// The system.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn image_space_passes(
     view: ViewQuery<(
         &ViewCausticsBuffer,
