@@ -199,7 +199,6 @@ pub fn add_frame_systems_for_bench(schedule: &mut bevy::ecs::schedule::Schedule)
             trace::prepare_trace_scene,
             aaps::view::prepare_aaps_views,
             aaps::pipelines::queue_aaps_trace_variant,
-            image_space::pipelines::queue_image_space_pipelines,
             image_space::view::prepare_image_space_scene,
             image_space::pipelines::queue_image_space_trace_variant,
             image_space::view::prepare_image_space_views,

@@ -73,7 +73,7 @@ pub mod view;
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::pbr::deferred::deferred_lighting;
 use bevy::prelude::*;
-use bevy::render::{Render, RenderApp, RenderSystems};
+use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
 use bevy::shader::Shader;
 
 /// Render-app part; called from [`crate::render::build`] when AAPS (whose scene extraction it
@@ -97,10 +97,10 @@ pub(crate) fn build(app: &mut App) {
     };
     render_app
         .insert_resource(shaders)
+        .add_systems(RenderStartup, pipelines::init_image_space_pipelines)
         .add_systems(
             Render,
             (
-                pipelines::queue_image_space_pipelines,
                 view::prepare_image_space_scene,
                 pipelines::queue_image_space_trace_variant,
                 view::prepare_image_space_views,

@@ -71,22 +71,15 @@ pub struct ImageSpacePipelines {
     pub rsm: [CachedRenderPipelineId; 3],
 }
 
-/// Queue the pipelines the first time a camera uses image space (in `PrepareResources`): an
-/// app that never does compiles none of them.
-pub(crate) fn queue_image_space_pipelines(
+/// Create the layouts and queue the pipelines but the trace at `RenderStartup` (the trace is
+/// queued per scene variant by [`queue_image_space_trace_variant`]). Queued lazily on first
+/// use, the RSM pipelines sometimes became ready a frame later than the compute ones, which
+/// shifted the first traced frame between otherwise identical runs.
+pub(crate) fn init_image_space_pipelines(
     mut commands: Commands,
     shaders: Res<ImageSpaceShaders>,
     cache: Res<PipelineCache>,
-    existing: Option<Res<ImageSpacePipelines>>,
-    views: Query<&crate::render::ExtractedCaustics>,
 ) {
-    if existing.is_some()
-        || !views
-            .iter()
-            .any(|c| c.technique == crate::CausticsTechnique::ImageSpace)
-    {
-        return;
-    }
     use binding_types::*;
     let tex = || texture_2d(TextureSampleType::Float { filterable: false });
     let out = || texture_storage_2d(SVGF_FORMAT, StorageTextureAccess::WriteOnly);
