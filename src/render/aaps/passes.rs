@@ -168,31 +168,14 @@ pub fn aaps_passes(
     copy_to_history(&mut ctx, buffer, state);
     ctx.command_encoder().clear_buffer(&state.accum, 0, None);
 
-    // Task buffer: quadtree leaves from the density atlas, reduction to the root, and the
-    // trace dispatch size from the root.
-    {
-        let encoder = ctx.command_encoder();
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some("caustics_aaps_task_buffer"),
-            timestamp_writes: None,
-        });
-        let span = diagnostics.pass_span(&mut pass, TASK_PASS);
-        settle.settle(&mut pass);
-        pass.set_pipeline(leaves);
-        pass.set_bind_group(0, &groups.main, &[0]);
-        pass.dispatch_workgroups(texel_groups, 1, 1);
-        pass.set_pipeline(reduce);
-        for k in 0..state.reduce_steps {
-            let n = (atlas >> (k + 1)).max(1);
-            pass.set_bind_group(0, &groups.main, &[(k as u64 * LEVEL_STRIDE) as u32]);
-            pass.dispatch_workgroups((n * n).div_ceil(64), 1, 1);
-        }
-        pass.set_pipeline(trace_args);
-        pass.set_bind_group(0, &groups.main, &[0]);
-        pass.set_bind_group(1, &groups.args, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        span.end(&mut pass);
-    }
+    task_buffer_pass(
+        &mut ctx,
+        (diagnostics, &settle),
+        state,
+        &groups,
+        [leaves, reduce, trace_args],
+        texel_groups,
+    );
     log.record(TASK_PASS);
 
     // Emit and trace, then the draw and variance arguments.
@@ -259,6 +242,40 @@ pub fn aaps_passes(
             name,
         );
     }
+}
+
+/// The task buffer: quadtree leaves from the density atlas, reduction to the root, and the
+/// trace dispatch size from the root (`[leaves, reduce, trace_args]`).
+fn task_buffer_pass(
+    ctx: &mut RenderContext,
+    (diagnostics, settle): (Option<&DiagnosticsRecorder>, &SpanSettle),
+    state: &AapsViewState,
+    groups: &Groups,
+    [leaves, reduce, trace_args]: [&bevy::render::render_resource::ComputePipeline; 3],
+    texel_groups: u32,
+) {
+    let atlas = state.key.atlas[0];
+    let encoder = ctx.command_encoder();
+    let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+        label: Some("caustics_aaps_task_buffer"),
+        timestamp_writes: None,
+    });
+    let span = diagnostics.pass_span(&mut pass, TASK_PASS);
+    settle.settle(&mut pass);
+    pass.set_pipeline(leaves);
+    pass.set_bind_group(0, &groups.main, &[0]);
+    pass.dispatch_workgroups(texel_groups, 1, 1);
+    pass.set_pipeline(reduce);
+    for k in 0..state.reduce_steps {
+        let n = (atlas >> (k + 1)).max(1);
+        pass.set_bind_group(0, &groups.main, &[(k as u64 * LEVEL_STRIDE) as u32]);
+        pass.dispatch_workgroups((n * n).div_ceil(64), 1, 1);
+    }
+    pass.set_pipeline(trace_args);
+    pass.set_bind_group(0, &groups.main, &[0]);
+    pass.set_bind_group(1, &groups.args, &[]);
+    pass.dispatch_workgroups(1, 1, 1);
+    span.end(&mut pass);
 }
 
 /// The bind groups of a view's passes.

@@ -207,54 +207,7 @@ pub(crate) fn queue_volume_pipelines(
         "caustics:pipeline:volume_gbuffer_far",
         CompareFunction::Greater,
     );
-    let add = BlendComponent {
-        src_factor: BlendFactor::One,
-        dst_factor: BlendFactor::One,
-        operation: BlendOperation::Add,
-    };
-    // Without FLOAT32_BLENDABLE the splats add into fixed-point atomics (group 1) and write
-    // nothing to the target (`render::fixed_splat`).
-    let (layout, entry, blend, write_mask) = if fixed {
-        (
-            vec![
-                splat_layout.clone(),
-                crate::render::fixed_splat::fragment_layout(),
-            ],
-            "fs_splat_fixed",
-            None,
-            ColorWrites::empty(),
-        )
-    } else {
-        (
-            vec![splat_layout.clone()],
-            "fs_splat",
-            Some(BlendState {
-                color: add,
-                alpha: add,
-            }),
-            ColorWrites::ALL,
-        )
-    };
-    let splat = cache.queue_render_pipeline(RenderPipelineDescriptor {
-        label: Some("caustics:pipeline:volume_splat".into()),
-        layout,
-        vertex: VertexState {
-            shader: shaders.raster.clone(),
-            entry_point: Some("vs_splat".into()),
-            ..default()
-        },
-        fragment: Some(FragmentState {
-            shader: shaders.raster.clone(),
-            entry_point: Some(entry.into()),
-            targets: vec![Some(ColorTargetState {
-                format: CAUSTICS_BUFFER_FORMAT,
-                blend,
-                write_mask,
-            })],
-            ..default()
-        }),
-        ..default()
-    });
+    let splat = splat_pipeline(&cache, &shaders, &splat_layout, fixed);
     let blur = cache.queue_render_pipeline(RenderPipelineDescriptor {
         label: Some("caustics:pipeline:volume_blur".into()),
         layout: vec![blur_layout.clone()],
@@ -287,4 +240,62 @@ pub(crate) fn queue_volume_pipelines(
         splat,
         blur,
     });
+}
+
+/// The splat pipeline: additive blending into the view's volume target, or without
+/// `FLOAT32_BLENDABLE` (`fixed`) fixed-point atomics in group 1 (`render::fixed_splat`).
+fn splat_pipeline(
+    cache: &PipelineCache,
+    shaders: &VolumeShaders,
+    splat_layout: &BindGroupLayoutDescriptor,
+    fixed: bool,
+) -> CachedRenderPipelineId {
+    let add = BlendComponent {
+        src_factor: BlendFactor::One,
+        dst_factor: BlendFactor::One,
+        operation: BlendOperation::Add,
+    };
+    // Without FLOAT32_BLENDABLE the splats add into fixed-point atomics (group 1) and write
+    // nothing to the target (`render::fixed_splat`).
+    let (layout, entry, blend, write_mask) = if fixed {
+        (
+            vec![
+                splat_layout.clone(),
+                crate::render::fixed_splat::fragment_layout(),
+            ],
+            "fs_splat_fixed",
+            None,
+            ColorWrites::empty(),
+        )
+    } else {
+        (
+            vec![splat_layout.clone()],
+            "fs_splat",
+            Some(BlendState {
+                color: add,
+                alpha: add,
+            }),
+            ColorWrites::ALL,
+        )
+    };
+    cache.queue_render_pipeline(RenderPipelineDescriptor {
+        label: Some("caustics:pipeline:volume_splat".into()),
+        layout,
+        vertex: VertexState {
+            shader: shaders.raster.clone(),
+            entry_point: Some("vs_splat".into()),
+            ..default()
+        },
+        fragment: Some(FragmentState {
+            shader: shaders.raster.clone(),
+            entry_point: Some(entry.into()),
+            targets: vec![Some(ColorTargetState {
+                format: CAUSTICS_BUFFER_FORMAT,
+                blend,
+                write_mask,
+            })],
+            ..default()
+        }),
+        ..default()
+    })
 }

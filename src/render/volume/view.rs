@@ -283,19 +283,7 @@ pub fn prepare_volumes(
             }
         };
         state.visible = visible;
-        // ViewParams: clip_from_world, world_from_clip, eye + radians per pixel.
-        let p11 = clip.y_axis.y.abs().max(1e-9);
-        let per_pixel = 2.0 / (p11 * size.y.max(1) as f32);
-        let mut b = Vec::with_capacity(144);
-        for v in clip
-            .to_cols_array()
-            .into_iter()
-            .chain(clip.inverse().to_cols_array())
-            .chain([eye.x, eye.y, eye.z, per_pixel])
-        {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-        queue.write_buffer(&state.params, 0, &b);
+        queue.write_buffer(&state.params, 0, &view_params(*clip, *eye, size));
         let r = volumes
             .iter()
             .map(|v| v.1.blur_radius)
@@ -312,6 +300,18 @@ pub fn prepare_volumes(
         }
         e.insert(VolumeViewFrame);
     }
+}
+
+/// `ViewParams` (raster.wgsl): clip_from_world, world_from_clip, eye and radians per pixel.
+fn view_params(clip: Mat4, eye: Vec3, size: UVec2) -> Vec<u8> {
+    let p11 = clip.y_axis.y.abs().max(1e-9);
+    let per_pixel = 2.0 / (p11 * size.y.max(1) as f32);
+    clip.to_cols_array()
+        .into_iter()
+        .chain(clip.inverse().to_cols_array())
+        .chain([eye.x, eye.y, eye.z, per_pixel])
+        .flat_map(|v| v.to_le_bytes())
+        .collect()
 }
 
 fn new_view_state(device: &RenderDevice, size: UVec2, fixed: bool) -> VolumeViewState {
