@@ -33,6 +33,8 @@ mod volume;
 mod volume_modes;
 #[path = "gpu/webgpu.rs"]
 mod webgpu;
+#[path = "gpu/window.rs"]
+mod window;
 
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -8,8 +8,14 @@
 //! into `CAUSTICS_EXAMPLE_OUT`, a folder) and the app exits. `CAUSTICS_EXAMPLE_SIZE=WxH`
 //! sets the offscreen size (default 640x360); the tests use both. Offscreen, the inspector
 //! window is closed unless `CAUSTICS_EXAMPLE_INSPECTOR=1`.
+//!
+//! With a display, `CAUSTICS_EXAMPLE_SIZE` sets the window's size, and
+//! `CAUSTICS_EXAMPLE_SCRIPT` runs a scripted game loop in the window (screenshots, resizes,
+//! camera and scene changes at given frames: `script.rs`), as the window tests do.
 
 #![allow(dead_code)]
+
+mod script;
 
 use std::time::Duration;
 
@@ -52,14 +58,19 @@ impl PluginGroup for DefaultPlugins {
         let name = example_name();
         let group = bevy::DefaultPlugins.build();
         if has_display() {
-            return group.set(WindowPlugin {
-                primary_window: Some(Window {
-                    title: format!("bevy_caustics: {name}"),
-                    resolution: (1280, 720).into(),
+            // `CAUSTICS_EXAMPLE_SIZE` sets the window's size too (the window tests).
+            let size = std::env::var_os("CAUSTICS_EXAMPLE_SIZE")
+                .map_or(UVec2::new(1280, 720), |_| offscreen_size());
+            return group
+                .set(WindowPlugin {
+                    primary_window: Some(Window {
+                        title: format!("bevy_caustics: {name}"),
+                        resolution: (size.x, size.y).into(),
+                        ..default()
+                    }),
                     ..default()
-                }),
-                ..default()
-            });
+                })
+                .add(script::WindowScript { name });
         }
         group
             .set(WindowPlugin {

@@ -146,7 +146,13 @@ pub struct ViewCausticsBuffer {
     pub size: UVec2,
     /// Serial of the reference image in it (0: none).
     pub uploaded: u64,
+    /// This texture's serial, unique in the process (from 1): a view that gets a new buffer
+    /// has nothing kept in it (`render::settle`).
+    pub serial: u64,
 }
+
+/// The next [`ViewCausticsBuffer::serial`].
+static BUFFER_SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 /// Workgroups of 64 for `n` threads (one per photon) as a 2D grid, at most 65 535 along x;
 /// the shaders rebuild the index as `y · groups.x · 64 + x`.
@@ -254,6 +260,7 @@ pub(crate) fn prepare_caustics_buffers(
                     view,
                     size,
                     uploaded: 0,
+                    serial: BUFFER_SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
                 });
                 new_buffer.as_mut().unwrap()
             }

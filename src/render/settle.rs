@@ -1,14 +1,24 @@
-//! Work follows change: a view whose inputs stayed the same for
-//! [`crate::Caustics::settle_frames`] frames keeps its caustics buffer and dispatches nothing.
+//! Work follows change: a view whose inputs stayed the same while its technique filled the
+//! caustics buffer [`crate::Caustics::settle_frames`] times keeps that buffer and dispatches
+//! nothing.
 //!
 //! [`track_settle`] (render world, `PrepareViews`, every caustics view) compares what the
 //! view's caustics depend on with the last frame: the gathered scene's generation (it changes
 //! when a caustic light, a caster, a receiver or a material changes), the camera's
-//! `clip_from_world`, the viewport size, the technique and its settings, the photon budget and
-//! the stereo pairing. [`ViewSettle::still`] counts the frames in a row it stayed the same; once
-//! it reaches `settle_frames` the techniques skip their passes ([`ViewSettle::keep`]) and the
-//! caustics buffer, which persists between frames, holds the last result. What each technique
-//! re-runs on each kind of change is tabled in its module doc and the README.
+//! `clip_from_world`, the viewport size, the technique and its settings, the photon budget, the
+//! stereo pairing, and which caustics buffer the view has. [`ViewSettle::still`] counts the
+//! frames since the last change **in which the technique's passes ran** (each technique's pass
+//! system calls [`ViewSettle::mark_ran`] once it has recorded all of its work into the buffer);
+//! once it reaches `settle_frames` the techniques skip their passes ([`ViewSettle::keep`]) and
+//! the caustics buffer, which persists between frames, holds the last result.
+//!
+//! Counting frames that ran, not frames that passed, is what makes a kept buffer a filled one.
+//! A window's first frames compile the pipelines asynchronously: the passes return early, no
+//! work is recorded, and a view counted as still by elapsed frames settled on an empty buffer
+//! (issue 27: the README's app lost its caustic for good after `settle_frames` frames in a
+//! window). The same holds for a buffer made anew (a resize, a camera whose render entity was
+//! re-synced): its serial is part of the key. What each technique re-runs on each kind of
+//! change is tabled in its module doc and the README.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -16,8 +26,8 @@ use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::view::ExtractedView;
 
-use super::ExtractedCaustics;
 use super::trace::scene::ExtractedCausticsScene;
+use super::{ExtractedCaustics, ViewCausticsBuffer};
 use crate::{
     AapsSettings, CausticsStereo, CausticsTechnique, ImageSpaceSettings, PhotonMapSettings,
 };
@@ -34,19 +44,26 @@ struct SettleKey {
     photon_map: PhotonMapSettings,
     stereo: Option<CausticsStereo>,
     photons_per_light: u64,
+    /// The caustics buffer's serial (0: none yet, or one of another size is to be replaced).
+    buffer: u64,
 }
 
 /// Per caustics view (render world): how long its inputs have stayed the same.
 #[derive(Component, Default)]
 pub struct ViewSettle {
     key: Option<SettleKey>,
-    /// Frames in a row, before this one, with the same inputs (0 on a frame that changed).
+    /// Frames, before this one, in which the technique's passes ran with the same inputs
+    /// (0 on a frame that changed).
     pub still: u32,
+    /// The technique's passes ran last frame (they filled the buffer).
+    pub last_ran: bool,
     /// This frame may keep the last result: `settle_frames > 0` and `still >= settle_frames`.
     pub keep: bool,
     /// The technique kept its last result this frame (set by its prepare system; the
     /// composite then draws the buffer without a pass of the technique having run).
     kept: AtomicBool,
+    /// The technique's passes recorded all of their work this frame ([`Self::mark_ran`]).
+    ran: AtomicBool,
 }
 
 impl ViewSettle {
@@ -54,6 +71,12 @@ impl ViewSettle {
     /// last result.
     pub fn mark_kept(&self) {
         self.kept.store(true, Ordering::Relaxed);
+    }
+
+    /// Record that the technique's passes recorded all of their work into the caustics buffer
+    /// this frame (called by the pass system at its end, never on an early return).
+    pub fn mark_ran(&self) {
+        self.ran.store(true, Ordering::Relaxed);
     }
 
     /// Whether the technique kept its last result this frame.
@@ -82,35 +105,45 @@ pub fn track_settle(
         &ExtractedCaustics,
         &ExtractedCamera,
         &ExtractedView,
+        Option<&ViewCausticsBuffer>,
         Option<&mut ViewSettle>,
     )>,
 ) {
     let generation = scene.map_or(0, |s| s.0.generation);
-    for (entity, caustics, camera, view, settle) in &mut views {
+    for (entity, caustics, camera, view, buffer, settle) in &mut views {
+        let size = camera.physical_viewport_size.unwrap_or_default();
         let key = SettleKey {
             generation,
             clip_from_world: super::clip_from_world(view)
                 .to_cols_array()
                 .map(f32::to_bits),
-            size: camera.physical_viewport_size.unwrap_or_default(),
+            size,
             technique: caustics.technique,
             aaps: caustics.aaps.clone(),
             image_space: caustics.image_space.clone(),
             photon_map: caustics.photon_map.clone(),
             stereo: caustics.stereo,
             photons_per_light: caustics.photons_per_light,
+            // A buffer of another size is replaced this frame (`prepare_caustics_buffers`).
+            buffer: buffer.filter(|b| b.size == size).map_or(0, |b| b.serial),
         };
         let Some(mut settle) = settle else {
             commands.entity(entity).insert(ViewSettle {
                 key: Some(key),
                 still: 0,
+                last_ran: false,
                 keep: false,
                 kept: AtomicBool::new(false),
+                ran: AtomicBool::new(false),
             });
             continue;
         };
-        if settle.key.as_ref() == Some(&key) {
-            settle.still = settle.still.saturating_add(1);
+        let ran = settle.ran.swap(false, Ordering::Relaxed);
+        settle.last_ran = ran;
+        if settle.key.as_ref() == Some(&key) && key.buffer != 0 {
+            if ran {
+                settle.still = settle.still.saturating_add(1);
+            }
         } else {
             settle.key = Some(key);
             settle.still = 0;

@@ -29,7 +29,7 @@ const SIZE: (u32, u32) = (160, 90);
 /// The examples, in the order the README lists them.
 const EXAMPLES: [&str; 5] = ["minimal", "showcase", "aaps", "volumes", "gltf_viewer"];
 
-fn example_exe(name: &str) -> PathBuf {
+pub(super) fn example_exe(name: &str) -> PathBuf {
     // target/release/deps/gpu-* -> target/release/examples/<name>
     let exe = std::env::current_exe().unwrap();
     exe.parent()

@@ -15,6 +15,7 @@ use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 use super::pipelines::AapsPipelines;
 use super::view::{AapsFrame, AapsStereo, AapsViewState, LEVEL_STRIDE};
 use crate::render::fixed_splat::{self, FixedSplatPipelines};
+use crate::render::settle::ViewSettle;
 use crate::render::span::SpanSettle;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::trace::{TraceSpecialization, wanted_features};
@@ -64,6 +65,7 @@ pub fn aaps_passes(
         &AapsViewState,
         &AapsFrame,
         Option<&AapsStereo>,
+        Option<&ViewSettle>,
     )>,
     states: Query<&AapsViewState>,
     scene: Option<Res<TraceSceneBuffers>>,
@@ -75,7 +77,7 @@ pub fn aaps_passes(
     fixed: Option<Res<FixedSplatPipelines>>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _, stereo) = view.into_inner();
+    let (buffer, prepass, state, _, stereo, view_settle) = view.into_inner();
     // Fixed-point splats (no FLOAT32_BLENDABLE): the accumulator and its resolve.
     let fixed = match (&state.fixed, fixed.as_deref()) {
         (Some(accumulator), Some(p)) => Some(FixedSplat {
@@ -162,6 +164,7 @@ pub fn aaps_passes(
             fixed.as_ref(),
             &log,
         );
+        view_settle.inspect(|s| s.mark_ran());
         return;
     }
 
@@ -242,6 +245,7 @@ pub fn aaps_passes(
             name,
         );
     }
+    view_settle.inspect(|s| s.mark_ran());
 }
 
 /// The task buffer: quadtree leaves from the density atlas, reduction to the root, and the

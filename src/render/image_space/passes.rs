@@ -165,6 +165,7 @@ pub fn image_space_passes(
         &ViewPrepassTextures,
         &ImageSpaceViewState,
         &ImageSpaceFrame,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
     scene: Option<Res<ImageSpaceScene>>,
     pipelines: Option<Res<ImageSpacePipelines>>,
@@ -174,7 +175,7 @@ pub fn image_space_passes(
     settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _) = view.into_inner();
+    let (buffer, prepass, state, _, view_settle) = view.into_inner();
     let (Some(scene), Some(pipelines)) = (scene, pipelines) else {
         return;
     };
@@ -312,6 +313,7 @@ pub fn image_space_passes(
         );
     }
     debug_assert!(IMAGE_SPACE_COUNTERS.len() as u64 <= COUNTER_WORDS);
+    view_settle.inspect(|s| s.mark_ran());
 }
 
 /// SVGF: temporal (raw → filter[1], moments), variance (filter[1] → filter[0]), then

@@ -76,6 +76,7 @@ pub fn photon_map_passes(
         &PhotonMapViewState,
         &PhotonMapFrame,
         Option<&PhotonMapStereo>,
+        Option<&crate::render::settle::ViewSettle>,
     )>,
     states: Query<&PhotonMapViewState>,
     scene: Option<Res<TraceSceneBuffers>>,
@@ -86,7 +87,7 @@ pub fn photon_map_passes(
     specialization: Option<Res<TraceSpecialization>>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _, stereo) = view.into_inner();
+    let (buffer, prepass, state, _, stereo, view_settle) = view.into_inner();
     let Some(pipelines) = pipelines else {
         return;
     };
@@ -218,4 +219,5 @@ pub fn photon_map_passes(
         let at = word * 4;
         diagnostics.record_u32(ctx.command_encoder(), &state.header.slice(at..at + 4), name);
     }
+    view_settle.inspect(|s| s.mark_ran());
 }

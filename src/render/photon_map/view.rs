@@ -98,6 +98,8 @@ pub struct PhotonMapViewState {
     pub dummy: Buffer,
     /// The frozen mean is in the caustics buffer: later frozen frames dispatch nothing.
     pub frozen_shown: bool,
+    /// Last frame was to show the frozen mean (shown once its passes ran).
+    pub frozen_pending: bool,
     accumulating: Option<Accumulating>,
 }
 
@@ -181,6 +183,7 @@ impl PhotonMapViewState {
             radius: 0.0,
             traces: false,
             frozen_shown: false,
+            frozen_pending: false,
             dummy: buffer("caustics:photon_map:dummy", 16, storage),
             accumulating: None,
         }
@@ -278,7 +281,15 @@ pub fn prepare_photon_map_views(
         if state.accumulating.as_ref() != Some(&now) {
             state.frame = 0;
             state.frozen_shown = false;
+            state.frozen_pending = false;
             state.accumulating = Some(now);
+        }
+        // Whether last frame's passes ran (`render::settle`): while the pipelines compile they
+        // return early, and a frame that did not run neither counts in the progressive mean
+        // nor shows the frozen one.
+        let last_ran = settle.is_none_or(|s| s.last_ran);
+        if state.frozen_pending && last_ran {
+            state.frozen_shown = true;
         }
         let frozen = settings.progressive && state.frame >= settings.max_frames;
         // Work follows change (`render::settle`): a frozen mean already shown, or without
@@ -296,12 +307,15 @@ pub fn prepare_photon_map_views(
             e.remove::<PhotonMapFrame>();
             continue;
         }
-        state.frozen_shown = frozen;
+        state.frozen_pending = frozen;
         if !frozen {
-            state.frame = if settings.progressive {
+            state.frame = if !settings.progressive {
+                1
+            } else if state.frame == 0 || last_ran {
                 state.frame + 1
             } else {
-                1
+                // Trace this sample again: the last one never ran.
+                state.frame
             };
             state.serial = state.serial.wrapping_add(1);
         }

@@ -484,4 +484,5 @@ pub fn volume_passes(
             diagnostics.record_u32(ctx.command_encoder(), &v.counts.slice(at..at + 4), name);
         }
     }
+    view_settle.inspect(|s| s.mark_ran());
 }
