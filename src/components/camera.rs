@@ -27,9 +27,11 @@ pub struct Caustics {
     pub debug_view: CausticsDebugView,
     /// Seed of the random streams of stochastic techniques. Default 1. Any value.
     pub seed: u64,
-    /// Frames in a row in which nothing the caustics depend on changed (the scene's lights,
-    /// casters, receivers and materials, the camera, the size, the settings) after which the
-    /// view keeps its caustics buffer and dispatches nothing until something changes. Default
+    /// Frames in which the technique ran and nothing the caustics depend on changed (the
+    /// scene's lights, casters, receivers and materials, the camera, the size, the settings)
+    /// after which the view keeps its caustics buffer and dispatches nothing until something
+    /// changes. Frames whose passes could not run (a window's pipelines still compiling) do
+    /// not count, so what is kept is always a filled buffer. Default
     /// 16 (AAPS's task buffer has settled by then, so what it keeps is what it would trace
     /// again). 0: every frame runs its technique. Costs nothing; a still frame then costs only
     /// the composite. The photon map's progressive mean freezes by its own `max_frames`.

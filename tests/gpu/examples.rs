@@ -2,7 +2,9 @@
 //! offscreen for a few frames and writes its PNG. Each must exit cleanly with no error in its
 //! log, report a finite caustics buffer, and match its committed golden image
 //! (tests/goldens/<example>.png) within a mean FLIP of [`GOLDEN_FLIP`]. The goldens are 160x90
-//! renders of 8 frames; `BEVY_CAUSTICS_BLESS=1` rewrites them.
+//! renders of [`FRAMES`] frames, twice the default `settle_frames` (16): a still example's
+//! golden is its settled view's kept caustics buffer (issue 27). `BEVY_CAUSTICS_BLESS=1`
+//! rewrites them.
 //!
 //! The tolerance: on lavapipe four of the five examples repeat exactly (mean FLIP 0.0000 to
 //! their goldens, measured) and the showcase differs by 0.0025 (its water mesh and turning gem
@@ -23,6 +25,8 @@ use super::{GPU, require_gpu};
 
 /// Mean FLIP an example's render may differ from its golden image.
 const GOLDEN_FLIP: f64 = 0.008;
+/// Frames rendered before the screenshot: 2x the default `settle_frames`.
+const FRAMES: u32 = 32;
 /// Size of the golden renders.
 const SIZE: (u32, u32) = (160, 90);
 
@@ -54,7 +58,7 @@ fn run_example(name: &str, out: &Path, size: (u32, u32), env: &[(&str, &str)]) -
         .env_remove("WAYLAND_DISPLAY")
         .env("CAUSTICS_EXAMPLE_OUT", out)
         .env("CAUSTICS_EXAMPLE_SIZE", format!("{}x{}", size.0, size.1))
-        .env("CAUSTICS_EXAMPLE_FRAMES", "8")
+        .env("CAUSTICS_EXAMPLE_FRAMES", FRAMES.to_string())
         .env("RUST_LOG", "warn")
         .current_dir(out);
     for (k, v) in env {
