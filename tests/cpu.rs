@@ -70,6 +70,62 @@ fn refraction_extremes() {
     assert!(g.is_finite() && g.y <= 0.0);
 }
 
+/// `dielectric_eta` at the extremes (issue 32 item 2): a thick surface uses `1 / ior` entering
+/// and `ior` leaving (TIR beyond the critical angle, as before); a thin wall uses the
+/// air-to-glass ratio from either side, so its reflectance is the same front and back and is
+/// never 1 short of exactly grazing incidence, for IOR 1 to 4.
+#[test]
+fn dielectric_eta_thin_and_thick() {
+    // Thick: the two sides differ.
+    assert_eq!(dielectric_eta(1.5, true, false), 1.0 / 1.5);
+    assert_eq!(dielectric_eta(1.5, false, false), 1.5);
+    assert_eq!(dielectric_eta(4.0, false, false), 4.0);
+    // Thin: air on both sides.
+    for ior in [1.0f32, 1.33, 1.5, 2.4, 4.0] {
+        for entering in [true, false] {
+            assert_eq!(dielectric_eta(ior, entering, true), 1.0 / ior, "ior {ior}");
+        }
+    }
+    // IOR 1: no interface from any side.
+    for (entering, thin) in [(true, true), (false, true), (true, false), (false, false)] {
+        let eta = dielectric_eta(1.0, entering, thin);
+        assert_eq!(eta, 1.0);
+        assert_eq!(fresnel_dielectric(0.3, eta), 0.0);
+    }
+    // Guards: non-finite or below-1 IOR is no interface.
+    for ior in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -2.0, 0.5] {
+        for (entering, thin) in [(true, true), (false, true), (true, false), (false, false)] {
+            assert_eq!(dielectric_eta(ior, entering, thin), 1.0, "ior {ior}");
+        }
+    }
+    // A thin wall never totally reflects: front and back give the same R < 1 at every
+    // incidence short of exactly grazing (where R = 1 is the grazing limit, not TIR), for
+    // IOR 1 to 4, including beyond the thick surface's critical angle from inside.
+    for ior in [1.0f32, 1.01, 1.5, 2.4, 4.0] {
+        for k in 1..=1000 {
+            let cos_i = k as f32 / 1000.0;
+            let front = fresnel_dielectric(cos_i, dielectric_eta(ior, true, true));
+            let back = fresnel_dielectric(cos_i, dielectric_eta(ior, false, true));
+            assert_eq!(front, back, "ior {ior} cos {cos_i}");
+            assert!(front < 1.0, "thin wall, ior {ior} cos {cos_i}: R = {front}");
+        }
+        // Grazing, 1e-3 from the surface: still short of 1.
+        let r = fresnel_dielectric(1e-3, dielectric_eta(ior, false, true));
+        assert!(r < 1.0, "ior {ior} grazing: {r}");
+    }
+    // Normal incidence from the back of a thin IOR 1.5 and 4 wall: 4 % and 36 %, as the front.
+    assert!((fresnel_dielectric(1.0, dielectric_eta(1.5, false, true)) - 0.04).abs() < 1e-6);
+    assert!((fresnel_dielectric(1.0, dielectric_eta(4.0, false, true)) - 0.36).abs() < 1e-6);
+    // The thick surface seen from inside still totally reflects beyond its critical angle
+    // (41.8 degrees at IOR 1.5: cos 0.745): 50 degrees from inside.
+    let c50 = 50f32.to_radians().cos();
+    assert_eq!(
+        fresnel_dielectric(c50, dielectric_eta(1.5, false, false)),
+        1.0
+    );
+    assert!(fresnel_dielectric(c50, dielectric_eta(1.5, false, true)) < 0.1);
+}
+
 #[test]
 fn beer_lambert_cases() {
     let c = Vec3::new(0.5, 0.25, 1.0);
@@ -771,6 +827,8 @@ mod photon_map;
 mod reference_cache;
 #[path = "cpu/report.rs"]
 mod report;
+#[path = "cpu/thin.rs"]
+mod thin;
 #[path = "cpu/volume.rs"]
 mod volume;
 #[path = "cpu/volume_modes.rs"]

@@ -45,6 +45,31 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
 }
 
+/// The relative index `eta = n_i / n_t` a photon meets at a dielectric surface of index `ior`
+/// (relative to air), written once for every tracer (the CPU reference and each GPU
+/// technique; the WGSL twin is `optics_dielectric_eta` in `src/render/optics.wgsl`).
+///
+/// - Thick (a closed volume, glTF `KHR_materials_volume` with `thickness > 0`): `1 / ior`
+///   entering from air, `ior` leaving into air, where total internal reflection can happen.
+/// - Thin-walled (glTF `KHR_materials_transmission` without a volume, `thickness = 0`): the
+///   wall has air on both sides, so light meets the air-to-glass ratio `1 / ior` from either
+///   side: the same Fresnel reflectance front and back, and never total internal reflection
+///   (`eta <= 1`, so [`fresnel_dielectric`] stays below 1 short of exactly grazing
+///   incidence). Without this a photon inside a closed thin shell, or a single-sided pane
+///   seen from its back, would use `eta = ior` and be totally reflected beyond 41.8 degrees
+///   at IOR 1.5 (issue 32): trapped in thin shells until the bounce cap.
+///
+/// `entering` is true when the photon arrives on the side the geometric normal faces (from
+/// outside a closed mesh); it is ignored for a thin wall.
+///
+/// Guards: a non-finite `ior` or one below 1 is treated as 1 (no interface, `eta = 1`), as
+/// the materials' `max(ior, 1)`.
+#[inline]
+pub fn dielectric_eta(ior: f32, entering: bool, thin: bool) -> f32 {
+    let ior = if ior.is_finite() { ior.max(1.0) } else { 1.0 };
+    if thin || entering { 1.0 / ior } else { ior }
+}
+
 /// Fresnel transmittance of a dielectric interface computed from the *transmitted* field
 /// (not as `1 - R`), so `R + T = 1` is a real test of energy conservation:
 ///

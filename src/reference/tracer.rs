@@ -533,7 +533,8 @@ fn trace_photon(
             }
             Surface::Dielectric { ior, thin, .. } => {
                 let entering = d.dot(ng) < 0.0;
-                let eta = if entering { 1.0 / ior } else { ior };
+                // A thin wall has air on both sides: 1 / ior from either, never TIR.
+                let eta = optics::dielectric_eta(ior, entering, thin);
                 let cos_i = -d.dot(ns_f);
                 let r = optics::fresnel_dielectric(cos_i, eta);
                 if r >= 1.0 {

@@ -28,6 +28,17 @@ fn optics_fresnel_dielectric(cos_i_in: f32, eta_in: f32) -> f32 {
     return clamp(0.5 * (rs * rs + rp * rp), 0.0, 1.0);
 }
 
+// dielectric_eta (src/optics/fresnel.rs): n_i / n_t at a dielectric of index `ior`. Thick:
+// 1 / ior entering, ior leaving. Thin-walled (glTF thickness 0): air on both sides, so 1 / ior
+// from either side and never total internal reflection. Non-finite or below-1 ior: 1.
+fn optics_dielectric_eta(ior_in: f32, entering: bool, thin: bool) -> f32 {
+    var ior = 1.0;
+    if ior_in <= 3.0e38 {
+        ior = max(ior_in, 1.0);
+    }
+    return select(ior, 1.0 / ior, thin || entering);
+}
+
 // reflect (src/optics/mod.rs).
 fn optics_reflect(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let r = d - 2.0 * dot(d, n) * n;

@@ -3,7 +3,10 @@
 //! strikes it to the walls: `caustic power on the walls = power striking the caster`, whatever
 //! the number of internal reflections. No path cap passes that by luck. And an absorbing slab
 //! under a perpendicular sun passes `E A (1 - R)^2 T / (1 - R^2 T^2)` to the floor (Beer-Lambert
-//! along the slab, every even number of internal reflections).
+//! along the slab, every even number of internal reflections). Thin-walled glass (glTF
+//! thickness 0) has air on both sides: a thin pane passes `1 - R` of its light from either
+//! side, a closed thin shell `(1 - R)^2` of the light that crosses it, and neither ever
+//! totally reflects.
 
 use glam::Vec3;
 
@@ -159,4 +162,63 @@ pub fn absorbing_slab_power() -> Vec3 {
     let r = crate::optics::fresnel_dielectric(1.0, 1.0 / ABSORBING_IOR);
     let t = crate::optics::beer_lambert(ABSORBING_COLOR, ABSORBING_DISTANCE, ABSORBING_THICKNESS);
     SUN_LUX * (1.0 - r) * (1.0 - r) * t / (Vec3::ONE - r * r * t * t)
+}
+
+/// IOR of [`thin_pane`] and [`thin_shell`].
+pub const THIN_IOR: f32 = 1.5;
+
+/// A 1 x 1 m single-sided pane of thin-walled glass (IOR [`THIN_IOR`], thickness 0: glTF
+/// transmission without a volume) 1 m above a floor, under a sun of [`SUN_LUX`] at
+/// `incidence` radians from the pane's normal, travelling along +X as it descends. With
+/// `from_back` the pane is turned over (normal -Y), so the sun strikes its back face. Either
+/// way the floor receives `E cos(incidence) (1 - R)` over the pane's shadow, centred at
+/// `x = tan(incidence)`, with `R` the air-to-glass Fresnel reflectance: a thin wall has air on
+/// both sides and never totally reflects (beyond 41.8 degrees the back face used to).
+pub fn thin_pane(incidence: f32, from_back: bool) -> SceneDesc {
+    let x = incidence.tan();
+    let eye = Vec3::new(x, 3.0, 3.0);
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(x, 0.0, 0.0)),
+        fov_y: 45f32.to_radians(),
+    };
+    let name = if from_back {
+        "thin_pane_back"
+    } else {
+        "thin_pane"
+    };
+    let mut s = SceneDesc::new(name, cam);
+    let grey = s.material("floor", diffuse(0.8), false);
+    let g = s.material("thin_glass", glass(THIN_IOR, 0.0), false);
+    s.add("floor", geometry::quad(12.0, 12.0), grey, Vec3::ZERO);
+    let pane = s.add(
+        "pane",
+        geometry::quad(1.0, 1.0),
+        g,
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+    if from_back {
+        s.nodes[pane].rotation = glam::Quat::from_rotation_x(core::f32::consts::PI);
+    }
+    s.lights.push(LightDesc {
+        name: "sun".into(),
+        kind: LightKind::Directional { lux: SUN_LUX },
+        color: Vec3::ONE,
+        translation: Vec3::new(-2.0, 4.0, 0.0),
+        rotation: shine_along(Vec3::new(incidence.sin(), -incidence.cos(), 0.0)),
+    });
+    s
+}
+
+/// The ball of [`super::glass_sphere`] as a closed shell of thin-walled glass (IOR
+/// [`THIN_IOR`], thickness 0) under the same vertical sun: light crossing it passes both walls
+/// unbent, `(1 - R)^2` of it at the incidence of its chord (the same at both walls), and light
+/// reflected inside meets the walls at that incidence again and leaves, never trapped by total
+/// internal reflection.
+pub fn thin_shell() -> SceneDesc {
+    let mut s = super::glass_sphere();
+    s.name = "thin_shell".into();
+    s.materials[1].name = "thin_glass".into();
+    s.materials[1].params = glass(THIN_IOR, 0.0);
+    s
 }

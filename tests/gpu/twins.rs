@@ -211,7 +211,8 @@ fn f4_bytes(v: &[[f32; 4]]) -> Vec<u8> {
 /// The WGSL twins of the optics core (`src/render/optics.wgsl`) against the Rust functions on
 /// 8192 inputs, extremes included (grazing, normal incidence, IOR 1, 1/4 and 4): Fresnel,
 /// refraction (including which side of TIR), reflection and the equal-area map to 1e-5,
-/// floor_square exactly.
+/// floor_square exactly, and `dielectric_eta` (thin and thick, both sides, IOR below 1
+/// guarded) to 1e-6 relative.
 #[test]
 fn wgsl_optics_match_rust() {
     use bevy_caustics::optics::*;
@@ -229,7 +230,7 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
     let a = inputs[2u * i];
     let b = inputs[2u * i + 1u];
     let h = optics_pcg_hash(i * 2654435761u);
-    outputs[4u * i] = vec4(optics_fresnel_dielectric(a.w, b.w), f32(optics_floor_square(a.w * 40.0)), optics_hash_unit(i, i * 7u + 3u), 0.0);
+    outputs[4u * i] = vec4(optics_fresnel_dielectric(a.w, b.w), f32(optics_floor_square(a.w * 40.0)), optics_hash_unit(i, i * 7u + 3u), optics_dielectric_eta(b.w, (i & 1u) == 0u, (i & 2u) != 0u));
     outputs[4u * i + 1u] = optics_refract(a.xyz, b.xyz, b.w);
     outputs[4u * i + 2u] = vec4(optics_reflect(a.xyz, b.xyz), f32(h & 0xffffffu));
     outputs[4u * i + 3u] = vec4(optics_equal_area_square_to_sphere(vec2(a.w, b.w / 4.0)), f32(h >> 8u));
@@ -257,10 +258,20 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
     let data = run_compute(&src, "optics_test", 0, &[f4_bytes(&input)], cases.len() * 4);
     let f = |i: usize| f32::from_le_bytes(data[4 * i..4 * i + 4].try_into().unwrap());
     let v = |e: usize| glam::Vec3::new(f(4 * e), f(4 * e + 1), f(4 * e + 2));
-    let mut worst = [0.0f32; 4];
+    let mut worst = [0.0f32; 5];
     for (i, (d, n, c, eta)) in cases.iter().enumerate() {
         let e = 4 * i;
         let fr = fresnel_dielectric(*c, *eta);
+        // The IOR is the case's eta (1/4 to 4); entering on even cases, thin on cases 2, 3 mod 4.
+        let (entering, thin) = ((i & 1) == 0, (i & 2) != 0);
+        let de = dielectric_eta(*eta, entering, thin);
+        let de_err = (f(4 * e + 3) - de).abs() / de;
+        worst[4] = worst[4].max(de_err);
+        assert!(
+            de_err < 1e-6,
+            "dielectric_eta({eta}, {entering}, {thin}): {} vs {de}",
+            f(4 * e + 3)
+        );
         worst[0] = worst[0].max((f(4 * e) - fr).abs());
         assert!(
             (f(4 * e) - fr).abs() < 1e-5,
@@ -306,12 +317,13 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
         );
     }
     println!(
-        "WGSL vs Rust over {} cases, worst |difference|: fresnel {:.1e}, refract {:.1e}, reflect {:.1e}, equal-area {:.1e}",
+        "WGSL vs Rust over {} cases, worst |difference|: fresnel {:.1e}, refract {:.1e}, reflect {:.1e}, equal-area {:.1e}, dielectric_eta (relative) {:.1e}",
         cases.len(),
         worst[0],
         worst[1],
         worst[2],
-        worst[3]
+        worst[3],
+        worst[4]
     );
 }
 

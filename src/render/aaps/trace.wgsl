@@ -213,9 +213,9 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
         }
 #ifdef TRACE_DIELECTRICS
         // Dielectric.
-        let ior = max(m0.y, 1.0);
+        // A thin wall has air on both sides: 1 / ior from either, never TIR.
         let thin = m0.z > 0.5;
-        let eta = select(ior, 1.0 / ior, entering);
+        let eta = optics_dielectric_eta(m0.y, entering, thin);
         let r = optics_fresnel_dielectric(-dot(d, ns_f), eta);
         var t = vec4(d, 1.0);
         if !thin {

@@ -524,14 +524,15 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         flux *= optics_fresnel_schlick(cos_i, mats[3u * inst + 2u].xyz);
 #ifdef TRACE_DIELECTRICS
     } else {
-        let ior = max(m0.y, 1.0);
-        let fr = optics_fresnel_dielectric(cos_i, 1.0 / ior);
+        // The light's first hit comes from air (the front layer): 1 / ior, thin or thick.
+        let eta = optics_dielectric_eta(m0.y, true, m0.z > 0.5);
+        let fr = optics_fresnel_dielectric(cos_i, eta);
         if optics_hash_unit(seed, 1u) < fr {
             d = optics_reflect(dir_in, n);
         } else if m0.z > 0.5 {
             d = dir_in;  // thin sheet: no bending
         } else {
-            let t = optics_refract(dir_in, n, 1.0 / ior);
+            let t = optics_refract(dir_in, n, eta);
             d = t.xyz;
             inside = true;
         }
@@ -565,13 +566,14 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         flux *= optics_beer_lambert(atten, m0.w, lb);
         let back = textureLoad(rsm, to_back.px, i32(light.misc.w) + 2, 0);
         let nb = rsm_normal(back);
-        let ior = max(m0.y, 1.0);
-        let t = optics_refract(d, nb, ior);
+        // Leaving a thick medium (only thick casters refract inside): ior.
+        let eta_out = optics_dielectric_eta(m0.y, false, false);
+        let t = optics_refract(d, nb, eta_out);
         if t.w == 0.0 {
             atomicAdd(&counters[C_TIR], 1u);
             return;
         }
-        flux *= 1.0 - optics_fresnel_dielectric(abs(dot(d, nb)), ior);
+        flux *= 1.0 - optics_fresnel_dielectric(abs(dot(d, nb)), eta_out);
         d = t.xyz;
         let out_side = select(nb, -nb, dot(d, nb) < 0.0);
         o = optics_offset_ray_origin(to_back.pos, out_side, scale);

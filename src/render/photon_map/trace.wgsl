@@ -118,8 +118,9 @@ fn trace_photon(i: u32) -> PathEnd {
 #ifdef TRACE_DIELECTRICS
         // Dielectric: reflect with the Fresnel probability (unbiased, flux unchanged).
         let m0 = scene_material(hit.instance, 0u);
+        // A thin wall has air on both sides: 1 / ior from either, never TIR.
         let thin = m0.z > 0.5;
-        let eta = select(max(m0.y, 1.0), 1.0 / max(m0.y, 1.0), s.entering);
+        let eta = optics_dielectric_eta(m0.y, s.entering, thin);
         let r = optics_fresnel_dielectric(-dot(d, s.ns_f), eta);
         var t = vec4(d, 1.0);
         if !thin {

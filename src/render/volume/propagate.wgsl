@@ -176,9 +176,9 @@ fn interact(p: ptr<function, VolPhoton>, n: vec3<f32>, inst: u32, rng: ptr<funct
         count(C_IGNORED);
         return 0u;
     }
-    let ior = max(m0.y, 1.0);
+    // A thin wall has air on both sides: 1 / ior from either, never TIR.
     let thin = m0.z > 0.5;
-    let eta = select(ior, 1.0 / ior, enter);
+    let eta = optics_dielectric_eta(m0.y, enter, thin);
     if exit {
         // Beer-Lambert over the length travelled inside.
         let att = optics_beer_lambert(materials[3u * inst + 1u].xyz, m0.w, (*p).normal.w);
