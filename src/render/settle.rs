@@ -97,6 +97,7 @@ pub fn keeps(settle: Option<&ViewSettle>) -> bool {
 }
 
 /// Update every caustics view's [`ViewSettle`].
+#[allow(clippy::type_complexity)]
 pub fn track_settle(
     mut commands: Commands,
     scene: Option<Res<ExtractedCausticsScene>>,

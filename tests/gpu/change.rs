@@ -268,7 +268,7 @@ fn headless_kept_buffer_holds_past_settling() {
         let sums: Vec<f64> = report
             .frame_caustics
             .iter()
-            .map(|c| c.sum().element_sum() as f64)
+            .map(|c| c.sum().element_sum())
             .collect();
         // One readback per frame (the camera's first frame included), the last one twice.
         assert!(sums.len() >= 48, "{technique:?}: {} readbacks", sums.len());
