@@ -165,10 +165,21 @@ pub struct PhotonMapCounters {
     pub missed: u64,
     /// Paths stopped at the bounce limit.
     pub max_depth: u64,
+    /// Paths ended by Russian roulette (after `optics::ROULETTE_DEPTH` specular events; their
+    /// flux lives on in the survivors').
+    pub roulette: u64,
     /// Total internal reflections.
     pub tir: u64,
     /// Non-finite states caught.
     pub nan_guards: u64,
+    /// Luminous flux striking the casters (photons' first hits), lm (or W weighted by
+    /// luminance).
+    pub flux_on_casters: f64,
+    /// Luminous flux reaching diffuse surfaces after a specular path, in view or not, stored or
+    /// past the capacity.
+    pub flux_deposited: f64,
+    /// Luminous flux still in flight when a path reached `max_bounces`.
+    pub flux_max_depth: f64,
     /// Grid cells (X·Y·Z) and the grid's dimensions.
     pub grid_cells: u64,
     /// X, Y, Z.
@@ -205,6 +216,11 @@ impl PhotonMapCounters {
     /// From the counter words of a readback (the header's first 32 words).
     pub fn from_words(w: &[u32]) -> Self {
         let c = |i: usize| w.get(i).copied().unwrap_or(0) as u64;
+        // A 64-bit fixed-point flux counter from word `i` (`C_FLUX_*` in photon.wgsl), lm.
+        let flux = |i: usize| {
+            (c(i) as f64 + c(i + 1) as f64 * 4_294_967_296.0)
+                / crate::render::photon_map::view::FLUX_SCALE
+        };
         let pixels = c(10);
         let per_pixel = |v: u64| {
             if pixels > 0 {
@@ -220,8 +236,12 @@ impl PhotonMapCounters {
             direct: c(2),
             missed: c(3),
             max_depth: c(5),
+            roulette: c(31),
             tir: c(6),
             nan_guards: c(7),
+            flux_on_casters: flux(25),
+            flux_deposited: flux(27),
+            flux_max_depth: flux(29),
             grid_cells: c(8),
             grid_dims: [c(21), c(22), c(23)],
             coarsened: c(9),

@@ -77,10 +77,20 @@ pub fn beer_lambert(attenuation_color: Vec3, attenuation_distance: f32, length: 
     Vec3::new(c.x.powf(x), c.y.powf(x), c.z.powf(x))
 }
 
-/// Survival probability of Russian roulette (the reference tracer, after
-/// `TraceSettings::roulette_depth` specular events) for a path carrying `flux` that left its light with
-/// largest channel `flux0`: the path's throughput (largest channel), clamped to [0.05, 1].
-/// Guard: a zero or non-finite `flux0` (a photon of no flux) survives with 0.05.
+/// Specular events after which Russian roulette ([`roulette_survival`]) may end a path: the
+/// reference tracer's default `TraceSettings::roulette_depth` and the photon map's trace
+/// (`OPTICS_ROULETTE_DEPTH` in src/render/optics.wgsl). 8: a clear-glass path keeps its
+/// flux (throughput 1, it always survives), so roulette only shortens the chains that have
+/// already lost most of their flux (metals, absorbing media), and no short caustic path pays
+/// the variance of it.
+pub const ROULETTE_DEPTH: u32 = 8;
+
+/// Survival probability of Russian roulette (the reference tracer after
+/// `TraceSettings::roulette_depth` specular events, the photon map's trace after
+/// [`ROULETTE_DEPTH`]) for a path carrying `flux` that left its light with largest channel
+/// `flux0`: the path's throughput (largest channel), clamped to [0.05, 1]. A survivor carries
+/// `flux / q` (unbiased). Guard: a zero or non-finite `flux0` (a photon of no flux) survives
+/// with 0.05. WGSL twin: `optics_roulette_survival`.
 #[inline]
 pub fn roulette_survival(flux: Vec3, flux0: f32) -> f32 {
     let q = flux.max_element() / flux0;

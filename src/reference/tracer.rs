@@ -60,9 +60,10 @@ pub struct TraceSettings {
     /// (`tests/cpu/energy.rs`). Cost: only the paths that long pay for it (the gem traces
     /// 0.35 M photons/s at 256 and at 64 alike on 2 cores).
     pub max_specular_events: u32,
-    /// Specular events after which Russian roulette may end a path (unbiased). Default 8.
-    /// `u32::MAX` switches it off. Paths whose flux is not reduced by the chain (clear glass)
-    /// always survive it; absorbing media and metals end earlier, which saves their work.
+    /// Specular events after which Russian roulette may end a path (unbiased). Default 8
+    /// ([`crate::optics::ROULETTE_DEPTH`], shared with the photon map's trace). `u32::MAX`
+    /// switches it off. Paths whose flux is not reduced by the chain (clear glass) always
+    /// survive it; absorbing media and metals end earlier, which saves their work.
     pub roulette_depth: u32,
 }
 
@@ -72,7 +73,7 @@ impl Default for TraceSettings {
             photons_per_light: 1 << 20,
             seed: 1,
             max_specular_events: 256,
-            roulette_depth: 8,
+            roulette_depth: optics::ROULETTE_DEPTH,
         }
     }
 }

@@ -117,6 +117,23 @@ fn optics_beer_lambert(color: vec3<f32>, dist: f32, len: f32) -> vec3<f32> {
     return pow(c, vec3(x));
 }
 
+// ROULETTE_DEPTH (src/optics/mod.rs): specular events after which Russian roulette may end a
+// path.
+const OPTICS_ROULETTE_DEPTH: u32 = 8u;
+
+// roulette_survival (src/optics/mod.rs): the path's throughput max(flux) / flux0, clamped to
+// [0.05, 1]; a zero flux0 or a non-finite ratio gives 0.05.
+fn optics_roulette_survival(flux: vec3<f32>, flux0: f32) -> f32 {
+    if flux0 == 0.0 {
+        return 0.05;
+    }
+    let q = max(max(flux.x, flux.y), flux.z) / flux0;
+    if !(abs(q) <= 3.40282347e38) {
+        return 0.05;
+    }
+    return clamp(q, 0.05, 1.0);
+}
+
 // pcg_hash (src/optics/sampling.rs): PCG-RXS-M-XS, Jarzynski and Olano 2020.
 fn optics_pcg_hash(x: u32) -> u32 {
     let state = x * 747796405u + 2891336453u;

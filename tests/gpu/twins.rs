@@ -401,7 +401,9 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
 /// The WGSL twins the AAPS passes use (`src/render/optics.wgsl`): Schlick, Beer-Lambert, spot
 /// falloff, Duff basis, scale-aware ray offset, differential transfer, the splat ellipse and
 /// the density update (suggested density, blend, budget), against the Rust core on random and
-/// extreme inputs (zero and huge offsets, grazing and parallel rays, scenes from 1e-3 to 1e4 m).
+/// extreme inputs (zero and huge offsets, grazing and parallel rays, scenes from 1e-3 to 1e4 m);
+/// and the photon map's Russian roulette (`roulette_survival` on throughputs from negative to
+/// far above 1 and a zero emitted flux, to 2e-6; `ROULETTE_DEPTH` exactly).
 #[test]
 fn wgsl_aaps_optics_match_rust() {
     use bevy_caustics::optics::*;
@@ -440,10 +442,10 @@ fn aaps_test(@builtin(global_invocation_id) id: vec3<u32>) {
         optics_budget_density(d.w, (i & 2u) == 0u, c.w * 100.0, a.w, 4.0, select(0.0, 300.0, (i & 4u) == 0u)),
     );
     let tb = optics_orthonormal_basis(c.xyz);
-    outputs[o + 3u] = vec4(tb[0], 0.0);
-    outputs[o + 4u] = vec4(tb[1], 0.0);
+    outputs[o + 3u] = vec4(tb[0], optics_roulette_survival(d.xyz, select(b.w * 40.0, 0.0, (i % 16u) == 5u)));
+    outputs[o + 4u] = vec4(tb[1], optics_roulette_survival(f0, c.w));
     let scale = pow(10.0, b.w * 7.0 - 3.0);
-    outputs[o + 5u] = vec4(optics_offset_ray_origin(d.xyz * scale, c.xyz, scale), 0.0);
+    outputs[o + 5u] = vec4(optics_offset_ray_origin(d.xyz * scale, c.xyz, scale), f32(OPTICS_ROULETTE_DEPTH));
     outputs[o + 6u] = optics_transfer_to_plane(d.xyz, a.xyz, b.xyz, c.xyz);
     let s = optics_splat_from_differentials(a.xyz, b.xyz, c.xyz, 16.0, 1.0e-4, 10.0);
     outputs[o + 7u] = vec4(s.a, select(0.0, 1.0, s.clamped));
@@ -549,6 +551,17 @@ fn aaps_test(@builtin(global_invocation_id) id: vec3<u32>) {
         let (t, bb) = orthonormal_basis(xyz(c));
         check("basis t", v(o + 3), t, 1e-5);
         check("basis b", v(o + 4), bb, 1e-5);
+        // Roulette: `d` spans negative to 50, the emitted flux 0 (every 16th case) to 40; and
+        // Fresnel-like throughputs in [0, 1) against an emitted flux in [0, 1).
+        let flux0 = if k % 16 == 5 { 0.0 } else { b[3] * 40.0 };
+        for (e, q) in [
+            (o + 3, roulette_survival(xyz(d), flux0)),
+            (o + 4, roulette_survival(f0, c[3])),
+        ] {
+            let g = f(4 * e + 3);
+            assert!((g - q).abs() <= 2e-6, "case {k}: roulette {g} vs {q}");
+        }
+        assert_eq!(f(4 * (o + 5) + 3), ROULETTE_DEPTH as f32, "roulette depth");
         let scale = 10f32.powf(b[3] * 7.0 - 3.0);
         let off = offset_ray_origin(xyz(d) * scale, xyz(c), scale);
         check("offset", v(o + 5), off, 1e-6);

@@ -4,9 +4,14 @@
 //! Per frame and view (see [`passes`]):
 //! 1. **Trace** with the shared tracer (src/render/trace/): photon `k` of each caustic light
 //!    starts at R2 point `k` of the light's parameter square (rotated every frame), carries
-//!    `power · weight / N`, goes through up to `max_bounces` specular events (dielectrics by
-//!    Fresnel probability, flux unchanged) and is stored at its first diffuse hit after a
-//!    specular one: position, flux, incoming direction and receiver normal in 32 bytes.
+//!    `power · weight / N`, goes through up to `max_bounces` (64) specular events
+//!    (dielectrics by Fresnel probability, flux unchanged; after `optics::ROULETTE_DEPTH`
+//!    events Russian roulette by `optics::roulette_survival`, as the reference tracer; the flux
+//!    in flight at the limit is counted) and is stored at its first diffuse hit after a
+//!    specular one: position, flux, incoming direction and receiver normal in 32 bytes. The
+//!    luminous flux striking the casters, deposited and in flight at the limit is summed per
+//!    workgroup into 64-bit fixed-point header words (`view::FLUX_SCALE`), for the energy
+//!    checks (`tests/gpu/energy.rs`).
 //! 2. **Grid build** (grid.wgsl, the twin of `optics::build_grid`): bounds with integer
 //!    atomics, the layout (cell = the first frame's radius, doubled while the grid would pass
 //!    its cell budget), count per cell, a two-level prefix sum (workgroup scans of 1024 cells,

@@ -33,10 +33,12 @@ pub const ALL_PASSES: [&str; 4] = [TRACE_PASS, GRID_PASS, GATHER_PASS, GATHER_RI
 
 /// Counters read into diagnostics (`render/caustics/photon_map/<name>`), by header word
 /// (`C_*` in photon.wgsl).
-pub const PHOTON_MAP_COUNTERS: [(&str, u64); 8] = [
+pub const PHOTON_MAP_COUNTERS: [(&str, u64); 10] = [
     ("caustics/photon_map/emitted", 0),
     ("caustics/photon_map/stored", 1),
     ("caustics/photon_map/overflow", 4),
+    ("caustics/photon_map/max_depth", 5),
+    ("caustics/photon_map/roulette", 31),
     ("caustics/photon_map/nan_guards", 7),
     ("caustics/photon_map/grid_cells", 8),
     ("caustics/photon_map/coarsened", 9),

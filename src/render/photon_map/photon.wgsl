@@ -10,7 +10,7 @@ struct Photon {
     normal: u32,    // receiver normal facing the photon's side, octahedral
 }
 
-// Header words 0..32: counters (read back; `PhotonMapCounters` in src/headless/job.rs).
+// Header words 0..32: counters (read back; `PhotonMapCounters` in src/headless/counters.rs).
 const C_EMITTED: u32 = 0u;        // photons leaving the lights with flux
 const H_COUNT: u32 = 1u;          // photons stored by the trace (may exceed the capacity)
 const C_DIRECT: u32 = 2u;         // first hit diffuse: direct light, not a caustic
@@ -34,6 +34,14 @@ const C_STEREO_PIXELS: u32 = 19u; // right-eye pixels considered for reuse
 const C_VISITED_MAX: u32 = 20u;   // the most visited at one pixel
 const C_DIMS: u32 = 21u;          // 3 words: X, Y, Z
 const C_FRAME: u32 = 24u;         // the progressive frame shown (1-based)
+// Luminous flux, 64-bit fixed point (low word, then high word; PM_FLUX_SCALE units per lm):
+const C_FLUX_CASTER: u32 = 25u;    // 2 words: striking the casters (photons' first hits)
+const C_FLUX_DEPOSITED: u32 = 27u; // 2 words: reaching a diffuse surface after a specular event
+const C_FLUX_MAX_DEPTH: u32 = 29u; // 2 words: in flight when a path reached the bounce limit
+const C_ROULETTE: u32 = 31u;       // paths ended by Russian roulette
+
+// Units per lumen of the flux counters (`FLUX_SCALE` in src/render/photon_map/view.rs).
+const PM_FLUX_SCALE: f32 = 65536.0;
 
 // Header words 32..64: the grid's layout (written by grid_setup).
 const H_STORED: u32 = 32u;  // min(count, capacity)

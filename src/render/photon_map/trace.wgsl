@@ -5,7 +5,12 @@
 // or refract with the exact Fresnel probability, flux unchanged, TIR always reflects;
 // Beer-Lambert inside media) and is stored at its first diffuse hit after at least one
 // specular event. Photons whose first hit is diffuse are direct light (not a caustic) and are
-// dropped, as in the reference tracer. Concatenated after the tracer's WGSL and photon.wgsl.
+// dropped, as in the reference tracer. Long chains as the reference tracer follows them: after
+// OPTICS_ROULETTE_DEPTH specular events a path survives each further one with probability
+// optics_roulette_survival (its throughput, at least 0.05) and carries flux / q when it does
+// (unbiased; a clear-glass path keeps throughput 1 and always survives); the flux still in
+// flight at the bounce limit is counted (C_FLUX_MAX_DEPTH), never silently dropped.
+// Concatenated after the tracer's WGSL and photon.wgsl.
 
 struct PmParams {
     world_from_clip: mat4x4<f32>,
@@ -38,18 +43,26 @@ const FLAG_REUSE: u32 = 16u;     // this view is a right eye: reuse the left eye
 struct PathEnd {
     // 0 nothing, 1 emitted and stored (`pos`..`n` hold it), 2 emitted and not stored.
     state: u32,
-    // Outcome counters: C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN as 1 << (k), TIR count in bits 8+.
+    // Outcome counters: C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_ROULETTE as 1 << (k), TIR
+    // count in bits 8+.
     counts: u32,
     pos: vec3<f32>,
     d: vec3<f32>,
     flux: vec3<f32>,
     n: vec3<f32>,
+    // Luminous flux (lm) striking the first caster, deposited at the diffuse hit (stored or
+    // past the capacity), in flight at the bounce limit (C_FLUX_*).
+    energy: vec3<f32>,
 }
 
 const END_DIRECT: u32 = 1u;
 const END_MISSED: u32 = 2u;
 const END_MAX_DEPTH: u32 = 4u;
 const END_NAN: u32 = 8u;
+const END_ROULETTE: u32 = 16u;
+// Roulette's uniforms come from the photon's key with this bit set in the event index, apart
+// from the Fresnel choices' (optics_hash_unit(key, bounces)).
+const ROULETTE_STREAM: u32 = 0x10000u;
 
 fn trace_photon(i: u32) -> PathEnd {
     var end: PathEnd;
@@ -64,6 +77,8 @@ fn trace_photon(i: u32) -> PathEnd {
     if !finite3(flux) || all(flux <= vec3(0.0)) {
         return end;
     }
+    // The emitted flux's largest channel: roulette's throughput is relative to it.
+    let flux0 = max(max(flux.x, flux.y), flux.z);
     end.state = 2u;
     let scale = params.eye.w;
     let key = i * 0x9e3779b9u + params.frame.z;
@@ -101,12 +116,27 @@ fn trace_photon(i: u32) -> PathEnd {
                 end.d = d;
                 end.flux = flux;
                 end.n = s.ng_f;
+                end.energy.y = luminance(flux);
             }
             break;
         }
+        if bounces == 0u {
+            end.energy.x = luminance(flux);
+        }
         if bounces >= params.emit.z {
             end.counts |= END_MAX_DEPTH;
+            end.energy.z = luminance(flux);
             break;
+        }
+        // Russian roulette (the reference tracer's rule and depth, optics::roulette_survival):
+        // unbiased, the survivors carry the flux of the ended paths.
+        if bounces >= OPTICS_ROULETTE_DEPTH {
+            let q = optics_roulette_survival(flux, flux0);
+            if optics_hash_unit(key, bounces | ROULETTE_STREAM) >= q {
+                end.counts |= END_ROULETTE;
+                break;
+            }
+            flux /= q;
         }
         bounces += 1u;
         if s.kind == MAT_CONDUCTOR {
@@ -151,13 +181,38 @@ fn trace_photon(i: u32) -> PathEnd {
     return end;
 }
 
-// Workgroup sums: emitted, stored, direct, missed, max depth, NaN, TIR.
-var<workgroup> wg_counts: array<atomic<u32>, 7>;
+// Add `v` lm (>= 0) to the 64-bit fixed-point counter at header words `at` (low) and `at + 1`
+// (high), PM_FLUX_SCALE units per lm rounded stochastically with `u` (unbiased). Returns
+// false, adding nothing, for a negative or non-finite `v`.
+fn add_flux(at: u32, v: f32, u: f32) -> bool {
+    if !(v >= 0.0 && v <= 3.0e38) {
+        return false;
+    }
+    // Below 2^60 units; an integer in f32, so the split into words is exact.
+    let x = min(floor(v * PM_FLUX_SCALE + clamp(u, 0.0, 1.0)), 1.0e18);
+    let hi = floor(x * (1.0 / 4294967296.0));
+    let lo = u32(x - hi * 4294967296.0);
+    var carry = 0u;
+    if lo != 0u {
+        let old = atomicAdd(&header[at], lo);
+        carry = select(0u, 1u, old + lo < old);
+    }
+    let h = u32(hi) + carry;
+    if h != 0u {
+        atomicAdd(&header[at + 1u], h);
+    }
+    return true;
+}
+
+// Workgroup sums: emitted, stored, direct, missed, max depth, NaN, roulette, TIR; and the
+// luminous flux of each photon (on casters, deposited, at the cap), summed by a tree.
+var<workgroup> wg_counts: array<atomic<u32>, 8>;
 var<workgroup> wg_base: u32;
+var<workgroup> wg_energy: array<vec3<f32>, 64>;
 
 @compute @workgroup_size(64)
-fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    if lid < 7u {
+fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>) {
+    if lid < 8u {
         atomicStore(&wg_counts[lid], 0u);
     }
     workgroupBarrier();
@@ -169,23 +224,30 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if end.state == 1u {
         local = atomicAdd(&wg_counts[1], 1u);
     }
-    for (var k = 0u; k < 4u; k += 1u) {
+    for (var k = 0u; k < 5u; k += 1u) {
         if (end.counts & (1u << k)) != 0u {
             atomicAdd(&wg_counts[2u + k], 1u);
         }
     }
     if (end.counts >> 8u) != 0u {
-        atomicAdd(&wg_counts[6], end.counts >> 8u);
+        atomicAdd(&wg_counts[7], end.counts >> 8u);
     }
+    wg_energy[lid] = end.energy;
     workgroupBarrier();
+    for (var half = 32u; half > 0u; half >>= 1u) {
+        if lid < half {
+            wg_energy[lid] += wg_energy[lid + half];
+        }
+        workgroupBarrier();
+    }
     if lid == 0u {
         let stored = atomicLoad(&wg_counts[1]);
         let base = atomicAdd(&header[H_COUNT], stored);
         wg_base = base;
         let cap = params.emit.w;
         let over = select(0u, base + stored - max(base, cap), base + stored > cap);
-        let words = array<u32, 7>(C_EMITTED, 0u, C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_TIR);
-        for (var k = 0u; k < 7u; k += 1u) {
+        let words = array<u32, 8>(C_EMITTED, 0u, C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_ROULETTE, C_TIR);
+        for (var k = 0u; k < 8u; k += 1u) {
             let v = atomicLoad(&wg_counts[k]);
             if k != 1u && v != 0u {
                 atomicAdd(&header[words[k]], v);
@@ -193,6 +255,14 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         }
         if over != 0u {
             atomicAdd(&header[C_OVERFLOW], over);
+        }
+        let flux_words = array<u32, 3>(C_FLUX_CASTER, C_FLUX_DEPOSITED, C_FLUX_MAX_DEPTH);
+        let e = wg_energy[0];
+        let group = wid.y * groups.x + wid.x;
+        for (var k = 0u; k < 3u; k += 1u) {
+            if e[k] != 0.0 && !add_flux(flux_words[k], e[k], optics_hash_unit(group, params.frame.z + k)) {
+                atomicAdd(&header[C_NAN], 1u);
+            }
         }
     }
     workgroupBarrier();

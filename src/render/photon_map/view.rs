@@ -26,6 +26,10 @@ pub const H_ORIGIN: usize = 45;
 pub const H_CELL: usize = 48;
 /// Header word: 1 / cell size, f32 bits.
 pub const H_INV: usize = 49;
+/// Units per lumen of the header's luminous-flux counters (64-bit fixed point, low word then
+/// high word; `C_FLUX_*` and `PM_FLUX_SCALE` in photon.wgsl): 1/65 536 lm, rounded
+/// stochastically per workgroup, and 2^64 units (2.8e14 lm) per frame before a sum wraps.
+pub const FLUX_SCALE: f64 = 65_536.0;
 /// Bytes of the per-view uniforms (`PmParams` in trace.wgsl).
 pub const PARAMS_BYTES: u64 = 3 * 64 + 8 * 16;
 
