@@ -288,15 +288,18 @@ fn count_and_shoot(
         .spawn(Screenshot::image(target.image.clone()))
         .observe(
             move |ev: On<ScreenshotCaptured>, mut target: ResMut<OffscreenTarget>| {
-                let result = ev
-                    .image
-                    .clone()
-                    .try_into_dynamic()
-                    .map_err(|e| e.to_string())
-                    .and_then(|i| i.to_rgb8().save(&path).map_err(|e| e.to_string()));
-                target.saved = Some(result);
+                target.saved = Some(save_rgb_png(&ev.image, &path));
             },
         );
+}
+
+/// Write a captured screenshot as an RGB PNG (the offscreen render and the window script).
+pub(crate) fn save_rgb_png(image: &Image, path: &std::path::Path) -> Result<(), String> {
+    image
+        .clone()
+        .try_into_dynamic()
+        .map_err(|e| e.to_string())
+        .and_then(|i| i.to_rgb8().save(path).map_err(|e| e.to_string()))
 }
 
 /// An orbit camera: left drag orbits around `focus`, right drag pans, the wheel zooms. Input

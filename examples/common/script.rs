@@ -255,13 +255,7 @@ fn run_script(
                 readback.request();
                 commands.spawn(Screenshot::primary_window()).observe(
                     move |ev: On<ScreenshotCaptured>, mut script: ResMut<Script>| {
-                        let saved = ev
-                            .image
-                            .clone()
-                            .try_into_dynamic()
-                            .map_err(|e| e.to_string())
-                            .and_then(|i| i.to_rgb8().save(&path).map_err(|e| e.to_string()));
-                        if let Err(e) = saved {
+                        if let Err(e) = super::save_rgb_png(&ev.image, &path) {
                             error!("cannot write {}: {e}", path.display());
                         }
                         script.writing = script.writing.saturating_sub(1);
