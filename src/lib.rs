@@ -19,15 +19,20 @@
 //!
 //! The optics core ([`optics`]) holds every formula once, in plain Rust on glam.
 
+#![warn(missing_docs)]
+
 pub mod components;
+#[cfg(feature = "tools")]
 pub mod headless;
 #[cfg(feature = "inspector")]
 pub mod inspector;
 pub mod limits;
 pub mod optics;
+#[cfg(feature = "tools")]
 pub mod reference;
 pub mod render;
 pub mod scene;
+#[cfg(feature = "tools")]
 pub mod scenes;
 pub mod volume;
 
@@ -46,7 +51,7 @@ pub use components::{
 #[cfg(feature = "inspector")]
 pub use inspector::CausticsInspectorPlugin;
 pub use limits::CausticsLimits;
-pub use render::CausticsDispatchLog;
+pub use render::{CausticImage, CausticsCpuImage, CausticsDispatchLog};
 
 /// Everything a user needs.
 pub mod prelude {
@@ -188,6 +193,7 @@ impl Plugin for CausticsPlugin {
             render_app.insert_resource(limits.clone());
             app.insert_resource(limits);
         }
+        #[cfg(feature = "tools")]
         reference::technique::plugin(app);
         let log = app
             .world()

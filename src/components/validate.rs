@@ -5,8 +5,8 @@
 use bevy::prelude::*;
 
 use super::{
-    AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsQuality, CausticsVolume,
-    ImageSpaceSettings, PhotonMapSettings,
+    AapsSettings, CausticLight, CausticMaterial, Caustics, CausticsQuality, CausticsTechnique,
+    CausticsVolume, ImageSpaceSettings, PhotonMapSettings,
 };
 use crate::limits::CausticsLimits;
 
@@ -292,10 +292,19 @@ pub fn sanitize_photon_map(a: &mut PhotonMapSettings, _limits: &CausticsLimits) 
     fixes
 }
 
-/// Clamp a camera's photon count (a `CausticsQuality::Custom` above what its technique
+/// Replace the `Reference` technique by AAPS when the `tools` feature (which holds the CPU
+/// reference) is off, and clamp a camera's photon count (a `CausticsQuality::Custom` above what its technique
 /// allows on this device, [`CausticsLimits::max_photons`]); returns what was fixed.
 pub fn sanitize_caustics(c: &mut Caustics, limits: &CausticsLimits) -> Vec<Fix> {
     let mut fixes = Vec::new();
+    if cfg!(not(feature = "tools")) && c.technique == CausticsTechnique::Reference {
+        fixes.push((
+            "technique",
+            "Reference (the CPU ground truth) needs bevy_caustics's `tools` feature; using Aaps"
+                .to_string(),
+        ));
+        c.technique = CausticsTechnique::Aaps;
+    }
     let max = limits.max_photons(c.technique);
     if let CausticsQuality::Custom { photons } = &mut c.quality
         && *photons > max

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use super::image::CausticImage;
+use super::CausticImage;
 use crate::optics::{PixelFocal, luminance};
 use crate::scene::{CameraProjection, TraceCamera};
 

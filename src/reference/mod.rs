@@ -3,12 +3,12 @@
 
 pub mod cache;
 pub mod curve;
-pub mod image;
+mod exr;
 pub mod metrics;
 pub mod technique;
 pub mod tracer;
 
-pub use image::CausticImage;
+pub use crate::render::image::CausticImage;
 pub use metrics::{ImageMetrics, compare, plane_region_mean};
 pub use technique::{CausticsReferenceImage, ReferenceProgress, ReferenceStatus};
 pub use tracer::{TraceOutput, TraceSettings, TraceStats, trace};

@@ -12,6 +12,7 @@ use glam::Affine3A;
 
 use super::{CausticImage, TraceSettings, TraceStats, trace};
 use crate::components::{Caustics, CausticsTechnique};
+use crate::render::CausticsCpuImage;
 use crate::scene::{CameraProjection, CausticsScene, TraceCamera};
 
 /// The latest reference image of a camera (main world), with the scene generation it was
@@ -120,8 +121,13 @@ fn run_reference(
         let mut e = commands.entity(entity);
         if !scene.is_active() {
             if status.as_deref() != Some(&ReferenceStatus::Inactive) {
-                e.remove::<(CausticsReferenceImage, ReferenceTask, RenderKey)>()
-                    .insert(ReferenceStatus::Inactive);
+                e.remove::<(
+                    CausticsReferenceImage,
+                    CausticsCpuImage,
+                    ReferenceTask,
+                    RenderKey,
+                )>()
+                .insert(ReferenceStatus::Inactive);
             }
             continue;
         }
@@ -138,9 +144,14 @@ fn run_reference(
             if let Some((image, stats, seconds)) = block_on(poll_once(&mut t.task)) {
                 *serial += 1;
                 let k = t.key.clone();
+                let image = Arc::new(image);
                 e.remove::<ReferenceTask>().insert((
+                    CausticsCpuImage {
+                        image: image.clone(),
+                        serial: *serial,
+                    },
                     CausticsReferenceImage {
-                        image: Arc::new(image),
+                        image,
                         stats,
                         serial: *serial,
                         seconds,

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use crate::optics::{self, Pcg32, PixelFocal};
 use crate::scene::{CameraProjection, Surface, Tlas, TraceCamera, TraceLight};
 
-use super::image::CausticImage;
+use super::CausticImage;
 
 /// Photons per work chunk (fixed, so results do not depend on the thread count).
 const CHUNK: u64 = 4096;

@@ -8,6 +8,7 @@
 pub mod aaps;
 pub mod composite;
 pub mod fixed_splat;
+pub mod image;
 pub mod image_space;
 pub mod memory;
 pub mod photon_map;
@@ -31,11 +32,11 @@ use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::sync_component::SyncComponent;
 use bevy::render::{Render, RenderApp, RenderSystems};
 
+pub use self::image::CausticImage;
 use crate::components::{
     AapsSettings, Caustics, CausticsDebugView, CausticsStereo, CausticsTechnique,
     ImageSpaceSettings, PhotonMapSettings,
 };
-use crate::reference::{CausticImage, CausticsReferenceImage};
 
 /// Format of the caustics buffer.
 pub const CAUSTICS_BUFFER_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
@@ -88,6 +89,17 @@ pub struct ExtractedCaustics {
     pub settle_frames: u32,
 }
 
+/// An irradiance image made on the CPU for a camera (the `Reference` technique of the `tools`
+/// feature makes one), shown as its caustics when its technique is
+/// [`CausticsTechnique::Reference`]. Extracted and uploaded when `serial` changes.
+#[derive(Component, Clone, Debug)]
+pub struct CausticsCpuImage {
+    /// Irradiance, lux, the size of the camera's viewport.
+    pub image: Arc<CausticImage>,
+    /// Increases with every new image.
+    pub serial: u64,
+}
+
 impl SyncComponent for Caustics {
     type Target = (ExtractedCaustics, ViewCausticsBuffer);
 }
@@ -95,7 +107,7 @@ impl SyncComponent for Caustics {
 impl ExtractComponent for Caustics {
     type QueryData = (
         &'static Caustics,
-        Option<&'static CausticsReferenceImage>,
+        Option<&'static CausticsCpuImage>,
         Option<&'static AapsSettings>,
         Option<&'static ImageSpaceSettings>,
         Option<&'static PhotonMapSettings>,
@@ -107,7 +119,7 @@ impl ExtractComponent for Caustics {
     fn extract_component(
         (c, reference, aaps, image_space, photon_map, stereo): (
             &Caustics,
-            Option<&CausticsReferenceImage>,
+            Option<&CausticsCpuImage>,
             Option<&AapsSettings>,
             Option<&ImageSpaceSettings>,
             Option<&PhotonMapSettings>,

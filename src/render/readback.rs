@@ -14,13 +14,13 @@ use bevy::render::render_resource::{
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
+use super::CausticImage;
 use super::aaps::view::{AapsViewState, SPLAT_GUARD_SPLATS};
 use super::image_space::view::ImageSpaceViewState;
 use super::photon_map::view::PhotonMapViewState;
 use super::volume::gpu::CNT;
 use super::volume::view::{VolumeStore, VolumeViewState};
 use super::{ExtractedCaustics, ViewCausticsBuffer};
-use crate::reference::CausticImage;
 
 /// Number of AAPS counter words read back (`C_*` in src/render/aaps/common.wgsl).
 pub const COUNTER_WORDS: usize = 32;
