@@ -18,6 +18,7 @@ use common::{Controls, DefaultPlugins, OrbitCamera};
 fn main() -> AppExit {
     App::new()
         .add_plugins((DefaultPlugins, CausticsPlugin, CausticsInspectorPlugin))
+        .add_plugins(common::WorldInspectorOnRequest)
         .add_plugins(Controls::new(
             "1/2/3: photon budget · space: adaptive on/off",
         ))

@@ -1,6 +1,9 @@
 //! The showcase: a sunlit courtyard with a pool of animated water over a tiled floor, a glass
 //! ball, a block of coloured (absorbing) glass, a mirror ring and a gem, with the sun moving
-//! slowly. Caustics by AAPS (the default technique), the inspector open.
+//! slowly. Caustics by AAPS (the default technique), the inspector open. A sky made at
+//! start-up (no downloaded asset) lights the scene and is reflected by the water, the glass
+//! and the ring; bloom and the AgX filmic tone map; the camera drifts round the courtyard
+//! until the mouse takes it.
 //!
 //! `cargo run --release --example showcase` (without a display it writes showcase.png)
 
@@ -10,8 +13,15 @@ use std::f32::consts::{FRAC_PI_2, PI};
 
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::Exposure;
+use bevy::core_pipeline::Skybox;
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::light::GeneratedEnvironmentMapLight;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
+use bevy::post_process::bloom::Bloom;
 use bevy::prelude::*;
+use bevy::render::render_resource::{
+    Extent3d, TextureDimension, TextureFormat, TextureViewDescriptor, TextureViewDimension,
+};
 use bevy_caustics::CausticsInspectorPlugin;
 use bevy_caustics::prelude::*;
 use common::{Controls, DefaultPlugins, OrbitCamera};
@@ -22,7 +32,7 @@ fn main() -> AppExit {
         .add_plugins(Controls::new("the sun moves; the water waves"))
         .insert_resource(ClearColor(Color::srgb(0.45, 0.62, 0.85)))
         .add_systems(Startup, setup)
-        .add_systems(Update, (move_sun, wave_water, turn_gem))
+        .add_systems(Update, (move_sun, wave_water, turn_gem, drift_camera))
         .run()
 }
 
@@ -47,6 +57,7 @@ fn setup(
     mut materials: ResMut<Assets<StandardMaterial>>,
     mut images: ResMut<Assets<Image>>,
 ) {
+    let sky = images.add(sky_cubemap(64));
     commands.spawn((
         Camera3d::default(),
         Caustics::default(),
@@ -58,6 +69,18 @@ fn setup(
         },
         Msaa::Off,
         Exposure { ev100: 13.0 },
+        Tonemapping::AgX,
+        Bloom::NATURAL,
+        Skybox {
+            image: Some(sky.clone()),
+            brightness: SKY_LUMINANCE,
+            ..default()
+        },
+        GeneratedEnvironmentMapLight {
+            environment_map: sky,
+            intensity: SKY_LUMINANCE,
+            ..default()
+        },
         OrbitCamera::looking_at(Vec3::new(2.0, 2.6, 4.2), Vec3::new(0.1, 0.3, 0.1)),
         Name::new("camera"),
     ));
@@ -136,11 +159,13 @@ fn setup(
             ..default()
         })
     };
-    // A glass ball.
+    // A glass ball, low enough that its focus lands on the floor: a ball of radius r and IOR
+    // n focuses parallel light n r / (2 (n - 1)) from its centre (0.525 m here), and the sun
+    // stands 50 degrees high, so the centre sits 0.525 sin 50 = 0.40 m above the floor.
     commands.spawn((
-        Mesh3d(meshes.add(Sphere::new(0.4).mesh().uv(64, 32))),
+        Mesh3d(meshes.add(Sphere::new(BALL_RADIUS).mesh().uv(64, 32))),
         MeshMaterial3d(glass(&mut materials, 1.5, Color::WHITE, f32::INFINITY)),
-        Transform::from_xyz(1.1, 0.8, -1.1),
+        Transform::from_xyz(1.1, BALL_HEIGHT, -1.1),
         Name::new("glass ball"),
     ));
     // A block of amber glass: 15 cm of it keeps 40 % of the blue, 90 % of the red.
@@ -186,10 +211,20 @@ fn setup(
     ));
 }
 
+/// The glass ball's radius, metres.
+const BALL_RADIUS: f32 = 0.35;
+/// The ball's centre above the floor: its paraxial focus, 1.5 r / (2 x 0.5) from the centre
+/// along the sun's rays (50 degrees high), on the floor.
+const BALL_HEIGHT: f32 = 1.5 * BALL_RADIUS * 0.766;
+/// The sky's luminance at the zenith, cd/m² (a clear blue sky is a few thousand).
+const SKY_LUMINANCE: f32 = 3000.0;
+/// The sun's elevation, radians.
+const SUN_ELEVATION: f32 = 50.0 * PI / 180.0;
+
 /// The sun circles slowly, 50° above the horizon.
 fn move_sun(time: Res<Time>, mut sun: Query<&mut Transform, With<Sun>>) {
     let a = 0.6 + time.elapsed_secs() * 0.05;
-    let (elevation, azimuth) = (50f32.to_radians(), a % (2.0 * PI));
+    let (elevation, azimuth) = (SUN_ELEVATION, a % (2.0 * PI));
     let towards_sun = Vec3::new(
         elevation.cos() * azimuth.cos(),
         elevation.sin(),
@@ -197,6 +232,26 @@ fn move_sun(time: Res<Time>, mut sun: Query<&mut Transform, With<Sun>>) {
     );
     for mut t in &mut sun {
         *t = Transform::from_translation(towards_sun * 5.0).looking_at(Vec3::ZERO, Vec3::Y);
+    }
+}
+
+/// With nobody at the mouse for 3 s, the camera drifts round the courtyard, 0.05 rad/s.
+fn drift_camera(
+    time: Res<Time>,
+    buttons: Res<ButtonInput<MouseButton>>,
+    mut idle: Local<f32>,
+    mut cameras: Query<&mut OrbitCamera>,
+) {
+    if buttons.get_pressed().next().is_some() {
+        *idle = 0.0;
+        return;
+    }
+    *idle += time.delta_secs();
+    if *idle < 3.0 {
+        return;
+    }
+    for mut c in &mut cameras {
+        c.yaw += 0.05 * time.delta_secs();
     }
 }
 
@@ -304,4 +359,79 @@ fn tile_texture() -> Image {
         ..bevy::image::ImageSamplerDescriptor::linear()
     });
     image
+}
+
+/// A clear sky as a cubemap of `side`² faces (+X, -X, +Y, -Y, +Z, -Z), relative luminance: a
+/// blue zenith, a pale horizon, a grey-brown ground (the sun itself is the directional light).
+/// Made at start-up, so the showcase downloads nothing; Bevy filters it into the diffuse and
+/// specular environment light (`GeneratedEnvironmentMapLight`).
+fn sky_cubemap(side: u32) -> Image {
+    let mut data = Vec::with_capacity((side * side * 6 * 8) as usize);
+    for face in 0..6 {
+        for y in 0..side {
+            for x in 0..side {
+                let u = 2.0 * (x as f32 + 0.5) / side as f32 - 1.0;
+                let v = 2.0 * (y as f32 + 0.5) / side as f32 - 1.0;
+                let d = cube_direction(face, u, v).normalize();
+                for c in sky_radiance(d).extend(1.0).to_array() {
+                    data.extend_from_slice(&f16_bits(c).to_le_bytes());
+                }
+            }
+        }
+    }
+    let mut image = Image::new(
+        Extent3d {
+            width: side,
+            height: side,
+            depth_or_array_layers: 6,
+        },
+        TextureDimension::D2,
+        data,
+        TextureFormat::Rgba16Float,
+        RenderAssetUsages::RENDER_WORLD,
+    );
+    image.texture_view_descriptor = Some(TextureViewDescriptor {
+        dimension: Some(TextureViewDimension::Cube),
+        ..default()
+    });
+    image
+}
+
+/// The direction through (u, v) in [-1, 1]² of a cube face, in wgpu's face order and
+/// orientation.
+fn cube_direction(face: u32, u: f32, v: f32) -> Vec3 {
+    match face {
+        0 => Vec3::new(1.0, -v, -u),
+        1 => Vec3::new(-1.0, -v, u),
+        2 => Vec3::new(u, 1.0, v),
+        3 => Vec3::new(u, -1.0, -v),
+        4 => Vec3::new(u, -v, 1.0),
+        _ => Vec3::new(-u, -v, -1.0),
+    }
+}
+
+/// Relative sky luminance towards `d` (1 at the zenith's blue).
+fn sky_radiance(d: Vec3) -> Vec3 {
+    let zenith = Vec3::new(0.30, 0.50, 1.00);
+    let horizon = Vec3::new(0.85, 0.92, 1.05);
+    let ground = Vec3::new(0.22, 0.20, 0.17);
+    if d.y < 0.0 {
+        return horizon.lerp(ground, (-d.y * 6.0).min(1.0));
+    }
+    horizon.lerp(zenith, d.y.powf(0.6))
+}
+
+/// An f32 as IEEE half-precision bits (round to nearest; the sky's values are small and
+/// positive, so no NaN and no overflow handling beyond clamping to the largest half).
+fn f16_bits(x: f32) -> u16 {
+    let x = x.clamp(0.0, 65504.0);
+    if x < 6.1e-5 {
+        // Subnormal halves: x / 2^-24.
+        return (x / 5.960_464_5e-8).round() as u16;
+    }
+    let bits = x.to_bits();
+    let exponent = ((bits >> 23) & 0xff) as i32 - 127 + 15;
+    let mantissa = (bits >> 13) & 0x3ff;
+    let round = (bits >> 12) & 1;
+    (((exponent as u32) << 10 | mantissa) + round) as u16
 }

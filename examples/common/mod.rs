@@ -429,3 +429,42 @@ fn help_line(
         });
     Ok(())
 }
+
+/// `CAUSTICS_EXAMPLE_WORLD_INSPECTOR=1` adds bevy-inspector-egui's world inspector beside the
+/// caustics inspector, both on one `EguiPlugin` (add this after `CausticsInspectorPlugin`,
+/// which adds the `EguiPlugin`). Every 10 frames the example prints which of the two windows
+/// the primary egui context shows (`egui windows: contexts=1 world_inspector=true
+/// caustics=true`), for the test that runs them together.
+pub struct WorldInspectorOnRequest;
+
+impl Plugin for WorldInspectorOnRequest {
+    fn build(&self, app: &mut App) {
+        if std::env::var("CAUSTICS_EXAMPLE_WORLD_INSPECTOR").is_ok_and(|v| v == "1") {
+            app.add_plugins(bevy_inspector_egui::quick::WorldInspectorPlugin::new())
+                .add_systems(Last, report_egui_windows);
+        }
+    }
+}
+
+fn report_egui_windows(
+    mut contexts: Query<&mut bevy_egui::EguiContext, With<bevy_egui::PrimaryEguiContext>>,
+    all: Query<(), With<bevy_egui::EguiContext>>,
+    mut frame: Local<u32>,
+) {
+    *frame += 1;
+    if *frame % 10 != 0 {
+        return;
+    }
+    for mut ctx in &mut contexts {
+        let ctx = ctx.get_mut();
+        let shown = |title: &str| {
+            let layer = egui::LayerId::new(egui::Order::Middle, egui::Id::new(title));
+            ctx.memory(|m| m.areas().is_visible(&layer))
+        };
+        let (world, caustics) = (shown("World Inspector"), shown("Caustics"));
+        println!(
+            "egui windows: contexts={} world_inspector={world} caustics={caustics}",
+            all.iter().count()
+        );
+    }
+}

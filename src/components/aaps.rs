@@ -22,6 +22,7 @@ pub struct AapsSettings {
     pub target_area: f32,
     /// Variance gain `g` of `D' = D A / A_t + v g`: photons added per unit of relative
     /// temporal variance. Default 4 (ours). 0 switches the variance term off.
+    #[reflect(@0.0_f32..=1.0e3_f32)]
     pub variance_gain: f32,
     /// Temporal weight `w_t` of the density blend (section 3.1.5): 1 keeps only the new
     /// suggestion, 0 only the neighbours' previous values. Default 0.5 (ours).
@@ -31,12 +32,14 @@ pub struct AapsSettings {
     #[reflect(@1.0_f32..=1.0e6_f32)]
     pub min_density: f32,
     /// Maximum ray density per texel; 0 means none. Default 0 (the thesis's experiments).
+    #[reflect(@0.0_f32..=1.0e6_f32)]
     pub max_density: f32,
     /// Large-splat threshold (section 3.3.5): the solid angle of a splat seen from its last
     /// specular interaction, `area / distance²`, in steradians. Splats above it do not steer
     /// the density (a grazing photon would otherwise ask for unbounded photons), and with
     /// `drop_large_splats` they are culled. Default 0.05 sr (ours; the thesis's lowest tried
     /// value was 0.0014). 0 disables both.
+    #[reflect(@0.0_f32..=12.57_f32)]
     pub cull_solid_angle: f32,
     /// Cull the splats above `cull_solid_angle` (the thesis's performance culling). Default
     /// false: culled splats take their energy with them (22 % of the `ring` scene's caustic
@@ -46,6 +49,7 @@ pub struct AapsSettings {
     /// Small-splat MSAA (section 5.1.3): splats whose screen area is under this many pixels
     /// are drawn into a 4x multisampled target with per-sample shading, then resolved and
     /// added. Default 4 px (ours). 0 switches it off. Cost: one resolve per frame.
+    #[reflect(@0.0_f32..=64.0_f32)]
     pub msaa_threshold: f32,
     /// Size of a splat relative to its photon's footprint: the ellipse's semi-axes are this
     /// times the singular values of the two differential offsets (which span the sample

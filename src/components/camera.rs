@@ -35,6 +35,7 @@ pub struct Caustics {
     /// 16 (AAPS's task buffer has settled by then, so what it keeps is what it would trace
     /// again). 0: every frame runs its technique. Costs nothing; a still frame then costs only
     /// the composite. The photon map's progressive mean freezes by its own `max_frames`.
+    #[reflect(@0_u32..=1024_u32)]
     pub settle_frames: u32,
 }
 

@@ -5,7 +5,7 @@ use bevy::prelude::*;
 /// `thickness`, `attenuation_*`), `metallic >= 0.9` with `perceptual_roughness <= 0.2` is a
 /// mirror with reflectance `base_color`, anything else is a diffuse receiver.
 #[derive(Component, Reflect, Clone, Debug, PartialEq)]
-#[reflect(Component, Clone)]
+#[reflect(Component, Default, Clone)]
 pub enum CausticMaterial {
     /// Glass, water, gems: Fresnel reflection and Snell refraction.
     Dielectric {
@@ -15,7 +15,10 @@ pub enum CausticMaterial {
         ior: f32,
         /// Colour left after `attenuation_distance` metres inside. Default white.
         attenuation_color: Color,
-        /// Metres; `f32::INFINITY` (default) for a clear medium. Must be > 0.
+        /// Metres; `f32::MAX` (default: JSON, as Bevy Remote Protocol speaks it, has no
+        /// infinity) or anything from 3e38 up, `f32::INFINITY` included, for a clear medium.
+        /// Must be > 0.
+        #[reflect(@1.0e-4_f32..=f32::MAX)]
         attenuation_distance: f32,
         /// A thin sheet (light passes without bending), like glTF's `thickness = 0`.
         thin: bool,
@@ -32,13 +35,20 @@ pub enum CausticMaterial {
     },
 }
 
+/// Clear glass of IOR 1.5 (what a reflection-driven editor adds).
+impl Default for CausticMaterial {
+    fn default() -> Self {
+        Self::glass(1.5)
+    }
+}
+
 impl CausticMaterial {
     /// Clear glass of the given IOR.
     pub fn glass(ior: f32) -> Self {
         Self::Dielectric {
             ior,
             attenuation_color: Color::WHITE,
-            attenuation_distance: f32::INFINITY,
+            attenuation_distance: f32::MAX,
             thin: false,
         }
     }

@@ -194,14 +194,14 @@ pub fn sanitize_material(m: &mut CausticMaterial) -> Vec<Fix> {
             *ior = i;
         }
         let d = if attenuation_distance.is_nan() || *attenuation_distance <= 0.0 {
-            f32::INFINITY
+            f32::MAX
         } else {
             *attenuation_distance
         };
         if d != *attenuation_distance {
             fixes.push((
                 "attenuation_distance",
-                format!("{attenuation_distance} is not > 0; set to infinity (clear)"),
+                format!("{attenuation_distance} is not > 0; set to f32::MAX (clear)"),
             ));
             *attenuation_distance = d;
         }

@@ -62,6 +62,7 @@ pub struct CausticsVolume {
     /// Slab level of detail (section 3.5): beyond this distance from the nearest camera, in
     /// volume diagonals, the slab count halves for every doubling of the distance. Default 8;
     /// 0 turns LOD off. Negative or non-finite values are clamped to 0 with a warning.
+    #[reflect(@0.0_f32..=1.0e3_f32)]
     pub lod_distance: f32,
     /// Differential updates (section 3.5): a change inside slab k re-runs slab k onwards and
     /// the projectors only, reusing the stored photon states of the earlier slabs. Default on.
@@ -77,6 +78,7 @@ pub struct CausticsVolume {
     /// pool is traced, then nothing runs until something changes. A change inside the volume
     /// restarts the accumulation from the first slab. Default 0 (off: the whole pool per
     /// update); a value at least `photons` is the same as off. Cost per frame: linear in it.
+    #[reflect(@0_u32..=16_777_216_u32)]
     pub progressive: u32,
 }
 

@@ -65,11 +65,12 @@ pub fn refract(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
 /// `T = c^(length / distance)` per channel, i.e. `exp(-sigma length)` with
 /// `sigma = -ln(c) / distance`.
 ///
-/// Guards: an infinite or non-positive distance means a clear medium (T = 1); a colour
+/// Guards: a distance from 3e38 up (`f32::MAX`, infinity) or not positive means a clear
+/// medium (T = 1), as in the WGSL twin `optics_beer_lambert`; a colour
 /// channel of 0 gives T = 0 for any positive length; colours are clamped to [0, 1].
 #[inline]
 pub fn beer_lambert(attenuation_color: Vec3, attenuation_distance: f32, length: f32) -> Vec3 {
-    if !attenuation_distance.is_finite() || attenuation_distance <= 0.0 || length <= 0.0 {
+    if !(attenuation_distance > 0.0 && attenuation_distance < 3.0e38) || length <= 0.0 {
         return Vec3::ONE;
     }
     let x = (length / attenuation_distance).min(1e6);

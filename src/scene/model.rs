@@ -1,7 +1,7 @@
 //! The plain-Rust scene every CPU algorithm reads: surfaces, lights, camera.
 //!
 //! Built from the ECS by [`super::collect`] and, in tests, directly from a
-//! [`crate::scenes::SceneDesc`]. No Bevy render types.
+//! `scenes::SceneDesc` (the `tools` feature). No Bevy render types.
 
 use glam::{Affine3A, Vec3};
 

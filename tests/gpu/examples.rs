@@ -176,7 +176,9 @@ fn examples_match_their_goldens() {
 }
 
 /// The inspector rendered headless: the `aaps` example with its panel open shows a live
-/// colour-mapped image of the task buffer's density.
+/// colour-mapped image of the task buffer's density. bevy-inspector-egui's world inspector
+/// runs in the same app on the same `EguiPlugin` (one bevy_egui, 0.40): both windows are shown
+/// by the one primary egui context.
 #[test]
 fn inspector_renders_a_live_task_buffer_image() {
     let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
@@ -186,38 +188,46 @@ fn inspector_renders_a_live_task_buffer_image() {
     let out = std::env::temp_dir().join(format!("bevy_caustics_inspector_{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let size = (800, 900);
-    let run = run_example("aaps", &out, size, &[("CAUSTICS_EXAMPLE_INSPECTOR", "1")]);
+    let run = run_example(
+        "aaps",
+        &out,
+        size,
+        &[
+            ("CAUSTICS_EXAMPLE_INSPECTOR", "1"),
+            ("CAUSTICS_EXAMPLE_WORLD_INSPECTOR", "1"),
+        ],
+    );
     check_caustics("aaps", &run.stdout);
-    // Pixels of the ramp's colours past its low end (density above the minimum's 0.4): the
-    // scene is grey and egui's accents are blue, so these are the live image's (and its
-    // legend's, 120 x 12 px).
-    // The image is linear; egui writes it to the sRGB target.
-    let srgb = |l: f32| bevy::color::Srgba::from(bevy::color::LinearRgba::rgb(l, l, l)).red;
-    let ramp_srgb: Vec<[f32; 3]> = (0..64)
-        .map(|i| bevy_caustics::inspector::model::ramp(0.3 + 0.7 * i as f32 / 63.0).map(srgb))
-        .collect();
-    let on_ramp = |p: [u8; 3]| {
-        let p = p.map(|c| c as f32 / 255.0);
-        ramp_srgb
-            .iter()
-            .any(|c| (0..3).all(|k| (c[k] - p[k]).abs() < 0.06))
-    };
-    let count = |x0: u32, x1: u32| {
+    let windows = run
+        .stdout
+        .lines()
+        .rfind(|l| l.starts_with("egui windows:"))
+        .unwrap_or_else(|| panic!("no egui window report in:\n{}", run.stdout));
+    assert_eq!(
+        windows, "egui windows: contexts=1 world_inspector=true caustics=true",
+        "both inspectors on one egui context"
+    );
+    // Strongly coloured pixels (channels spread by more than 60 of 255): the scene is grey, the
+    // panels are grey and egui's few accents (a selected row, check marks) are about 1 000 px,
+    // so these are the live image's (340 x 340 px) and its legend's. Exact colours are not
+    // predicted: how egui maps a texture and a vertex colour to the sRGB target changed between
+    // bevy_egui 0.40 and 0.42 (the image and its legend agree with each other in both).
+    let coloured = |x0: u32, x1: u32| {
         (0..size.1)
             .flat_map(|y| (x0..x1).map(move |x| (x, y)))
-            .filter(|&(x, y)| on_ramp(run.png.get_pixel(x, y).0))
+            .filter(|&(x, y)| {
+                let p = run.png.get_pixel(x, y).0;
+                p.iter().max().unwrap() - p.iter().min().unwrap() > 60
+            })
             .count()
     };
-    let total = count(0, size.0);
+    let total = coloured(0, size.0);
     println!(
-        "inspector: {total} pixels of the ramp's colours, {:.1} s (kept at {})",
+        "inspector: {total} strongly coloured pixels, {:.1} s (kept at {})",
         run.seconds,
         out.join("aaps.png").display()
     );
-    assert!(
-        total > 5_000,
-        "no live image ({total} px of the ramp's colours)"
-    );
+    assert!(total > 50_000, "no live image ({total} coloured px)");
     // The side panel: a dark column down the left edge.
     let dark = (0..size.1)
         .flat_map(|y| (0..300).map(move |x| (x, y)))
