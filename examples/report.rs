@@ -347,7 +347,7 @@ fn markdown(
     );
     let _ = writeln!(
         md,
-        "A known limit shows here: a caustics volume seeds nothing when its light is inside it (`ring`'s bulb sits inside the ring, so its volume rows have energy error -1; README, caustics volumes).\n"
+        "A known limit shows here: a caustics volume seeds nothing when its light is inside it (`ring`'s bulb sits inside the ring, so its volume rows have energy error -1; docs/volumes.md).\n"
     );
     let _ = writeln!(md, "Regenerate: `cargo run --release --example report`.\n");
     let _ = writeln!(md, "## Summary\n");

@@ -823,6 +823,8 @@ mod inspector;
 mod limits;
 #[path = "cpu/photon_map.rs"]
 mod photon_map;
+#[path = "cpu/readme.rs"]
+mod readme;
 #[path = "cpu/reference_cache.rs"]
 mod reference_cache;
 #[path = "cpu/report.rs"]

@@ -18,7 +18,7 @@
 //! (issue 27: the README's app lost its caustic for good after `settle_frames` frames in a
 //! window). The same holds for a buffer made anew (a resize, a camera whose render entity was
 //! re-synced): its serial is part of the key. What each technique re-runs on each kind of
-//! change is tabled in its module doc and the README.
+//! change is tabled in its module doc and docs/performance.md.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

@@ -121,7 +121,7 @@ pub struct VolumeNode {
     pub name: String,
     /// Centre of the volume, metres.
     pub translation: Vec3,
-    /// The `caustics_volume` object (README, "Caustics volumes").
+    /// The `caustics_volume` object (docs/volumes.md).
     pub extras: serde_json::Value,
 }
 

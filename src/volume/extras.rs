@@ -5,8 +5,8 @@ use bevy::prelude::*;
 
 use crate::components::{CausticsVolume, VolumeFace};
 
-/// A volume declared on a glTF node: `extras` with a `caustics_volume` object (see the
-/// README's "Caustics volumes" section for the keys). The node's transform places the box.
+/// A volume declared on a glTF node: `extras` with a `caustics_volume` object (see
+/// docs/volumes.md for the keys). The node's transform places the box.
 pub fn volume_from_extras(json: &str) -> Option<CausticsVolume> {
     let v: serde_json::Value = serde_json::from_str(json).ok()?;
     let o = v.get("caustics_volume")?;

@@ -432,7 +432,7 @@ fn volume_projector_texel_area() {
     assert!(projector_texel_area(1e20, 1e-20, 1e20, 1e20, 1, ax, ax, ax) == 0.0);
 }
 
-/// A glTF node declares a volume through `extras` (README, "Caustics volumes").
+/// A glTF node declares a volume through `extras` (docs/volumes.md).
 #[test]
 fn volume_from_gltf_extras() {
     use bevy_caustics::VolumeFace;

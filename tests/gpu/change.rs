@@ -1,6 +1,6 @@
 //! Work follows change (issue 16 item 1, `render::settle`): one run per technique on
 //! `glass_sphere` (32², `settle_frames` 2) changes one thing at a time and checks the dispatch
-//! log of the frames around each change against the technique's table (module docs, README):
+//! log of the frames around each change against the technique's table (module docs, docs/performance.md):
 //! nothing runs on a still frame once settled; a camera move, a light move, a caster move, a
 //! receiver move and a material change each re-run what they must, and only that.
 

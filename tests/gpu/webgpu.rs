@@ -91,7 +91,7 @@ fn webgpu_default_limits_and_missing_features() {
                 100.0 * (got[k] - base[k]) / base[k]
             );
             // A known limit: `ring`'s bulb sits inside its fitted volume, which then seeds
-            // nothing (README, caustics volumes); it must stay nothing.
+            // nothing (docs/volumes.md); it must stay nothing.
             if name == "ring" && *t == T::Volume {
                 assert_eq!(got[k], base[k], "{name} {t:?}: {what}");
                 continue;

@@ -1,5 +1,5 @@
 //! The README's app as a game runs it (issue 27): `examples/minimal` (the README's snippet
-//! below its `use common::DefaultPlugins` line, `tests/cpu/inspector.rs` keeps them identical)
+//! below its `use common::DefaultPlugins` line, `tests/cpu/readme.rs` keeps them identical)
 //! in a real window on an X server (Xvfb, which `.ci/run` installs), for 240 frames, with
 //! Bevy's `Screenshot` of the window at chosen frames (the script is in
 //! `examples/common/script.rs`). Once per technique:
