@@ -81,7 +81,7 @@ fn setup(
             intensity: SKY_LUMINANCE,
             ..default()
         },
-        OrbitCamera::looking_at(Vec3::new(2.0, 2.6, 4.2), Vec3::new(0.1, 0.3, 0.1)),
+        OrbitCamera::looking_at(Vec3::new(1.2, 2.3, 4.8), Vec3::new(0.2, 0.2, 0.0)),
         Name::new("camera"),
     ));
     commands.spawn((
@@ -165,7 +165,7 @@ fn setup(
     commands.spawn((
         Mesh3d(meshes.add(Sphere::new(BALL_RADIUS).mesh().uv(64, 32))),
         MeshMaterial3d(glass(&mut materials, 1.5, Color::WHITE, f32::INFINITY)),
-        Transform::from_xyz(1.1, BALL_HEIGHT, -1.1),
+        Transform::from_xyz(0.7, BALL_HEIGHT, -0.5),
         Name::new("glass ball"),
     ));
     // A block of amber glass: 15 cm of it keeps 40 % of the blue, 90 % of the red.
@@ -177,7 +177,7 @@ fn setup(
             Color::linear_rgb(0.9, 0.6, 0.2),
             0.15,
         )),
-        Transform::from_xyz(1.3, 0.9, 1.0).with_rotation(Quat::from_rotation_z(0.25)),
+        Transform::from_xyz(1.7, 0.8, -1.2).with_rotation(Quat::from_rotation_z(0.25)),
         Name::new("amber glass block"),
     ));
     // A polished ring on the floor: its inside focuses a cardioid.
@@ -189,7 +189,7 @@ fn setup(
             perceptual_roughness: 0.05,
             ..default()
         })),
-        Transform::from_xyz(2.6, 0.11, 0.0).with_rotation(Quat::from_rotation_x(-FRAC_PI_2)),
+        Transform::from_xyz(2.5, 0.11, 0.9).with_rotation(Quat::from_rotation_x(-FRAC_PI_2)),
         Name::new("mirror ring"),
     ));
     // A gem (diamond, IOR 2.42), faceted, turning slowly.
@@ -206,7 +206,7 @@ fn setup(
             ),
         ),
         MeshMaterial3d(glass(&mut materials, 2.42, Color::WHITE, f32::INFINITY)),
-        Transform::from_xyz(0.3, 1.0, 1.9).with_scale(Vec3::new(1.0, 0.6, 1.0)),
+        Transform::from_xyz(0.5, 0.9, 1.3).with_scale(Vec3::new(1.0, 0.6, 1.0)),
         Name::new("gem"),
     ));
 }
@@ -217,13 +217,15 @@ const BALL_RADIUS: f32 = 0.35;
 /// along the sun's rays (50 degrees high), on the floor.
 const BALL_HEIGHT: f32 = 1.5 * BALL_RADIUS * 0.766;
 /// The sky's luminance at the zenith, cd/m² (a clear blue sky is a few thousand).
-const SKY_LUMINANCE: f32 = 3000.0;
+const SKY_LUMINANCE: f32 = 6000.0;
 /// The sun's elevation, radians.
 const SUN_ELEVATION: f32 = 50.0 * PI / 180.0;
 
 /// The sun circles slowly, 50° above the horizon.
 fn move_sun(time: Res<Time>, mut sun: Query<&mut Transform, With<Sun>>) {
-    let a = 0.6 + time.elapsed_secs() * 0.05;
+    // Starting behind the objects (seen from the camera), so shadows and caustics fall
+    // towards the viewer.
+    let a = -1.3 + time.elapsed_secs() * 0.05;
     let (elevation, azimuth) = (SUN_ELEVATION, a % (2.0 * PI));
     let towards_sun = Vec3::new(
         elevation.cos() * azimuth.cos(),
@@ -414,7 +416,7 @@ fn cube_direction(face: u32, u: f32, v: f32) -> Vec3 {
 fn sky_radiance(d: Vec3) -> Vec3 {
     let zenith = Vec3::new(0.30, 0.50, 1.00);
     let horizon = Vec3::new(0.85, 0.92, 1.05);
-    let ground = Vec3::new(0.22, 0.20, 0.17);
+    let ground = Vec3::new(0.50, 0.48, 0.44);
     if d.y < 0.0 {
         return horizon.lerp(ground, (-d.y * 6.0).min(1.0));
     }
