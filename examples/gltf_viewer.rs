@@ -3,31 +3,57 @@
 //! they are. The glTF's first camera is used if it has one, else one looking at the scene.
 //!
 //! `cargo run --release --example gltf_viewer -- PATH.gltf` (default: the glass sphere test
-//! scene; without a display it writes gltf_viewer.png)
+//! scene; without a display it writes gltf_viewer.png). A file that is missing or that the
+//! glTF loader refuses prints one line (the path and the loader's reason) and exits with 2.
 
 mod common;
 
 use std::path::PathBuf;
 
+use bevy::asset::{LoadState, UntypedHandle};
 use bevy::camera::Exposure;
 use bevy::camera::primitives::Aabb;
+use bevy::gltf::Gltf;
+use bevy::log::LogPlugin;
 use bevy::prelude::*;
 use bevy_caustics::CausticsInspectorPlugin;
+use bevy_caustics::headless::{
+    LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
+};
 use bevy_caustics::mark_every_light;
 use bevy_caustics::prelude::*;
+use clap::Parser;
 use common::{Controls, DefaultPlugins, OrbitCamera};
 
+/// Open a glTF with caustics on: every light becomes a caustic light (with shadows), the
+/// glTF's glass and mirrors cast caustics as they are; its first camera is used if it has
+/// one, else one looking at the scene.
+///
+/// Without a display (no DISPLAY or WAYLAND_DISPLAY) it renders offscreen and writes
+/// gltf_viewer.png: CAUSTICS_EXAMPLE_SIZE=WxH (pixels, default 640x360),
+/// CAUSTICS_EXAMPLE_FRAMES=N (frames, default 20), CAUSTICS_EXAMPLE_OUT=DIR (default: the
+/// working directory). A file that is missing or that the glTF loader refuses prints one line
+/// and exits with status 2.
+#[derive(Parser, Debug)]
+#[command(name = "gltf_viewer")]
+struct Cli {
+    /// The glTF (.gltf or .glb) to open, relative to the working directory; its buffers and
+    /// textures load from its folder.
+    #[arg(
+        value_name = "PATH.gltf",
+        default_value_os_t = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/glass_sphere.gltf")
+    )]
+    path: PathBuf,
+}
+
 fn main() -> AppExit {
-    let path = std::env::args()
-        .nth(1)
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/glass_sphere.gltf")
-        });
-    let path = match std::fs::canonicalize(&path) {
+    // Before any thread: no "XDG_RUNTIME_DIR is invalid" lines from the drivers.
+    bevy_caustics::headless::quiet_headless_environment();
+    let given = Cli::parse().path;
+    let path = match std::fs::canonicalize(&given) {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("error: cannot open {}: {e}", path.display());
+            eprintln!("error: cannot open {}: {e}", given.display());
             std::process::exit(2);
         }
     };
@@ -37,26 +63,75 @@ fn main() -> AppExit {
         file_path: folder.unwrap_or_default(),
         ..default()
     };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // A file the loader refuses is told in one line by `refused`, not by the asset server.
+    report_load_failures_of(&name);
+    let log = LogPlugin {
+        custom_layer: quiet_reported_load_failures,
+        ..default()
+    };
     App::new()
         .add_plugins((
-            DefaultPlugins.set(asset),
+            DefaultPlugins.set(asset).set(log),
             CausticsPlugin,
             CausticsInspectorPlugin,
         ))
         .add_plugins(Controls::new("the scene's lights cast caustics"))
-        .insert_resource(ScenePath(path))
+        .insert_resource(ScenePath { given, name })
         .add_systems(Startup, load)
-        .add_systems(Update, (mark_every_light, caustics_camera))
+        .add_systems(Update, (refused, mark_every_light, caustics_camera))
         .run()
 }
 
 #[derive(Resource)]
-struct ScenePath(PathBuf);
+struct ScenePath {
+    /// The path as given on the command line.
+    given: PathBuf,
+    /// Its file name: the asset path in its folder.
+    name: String,
+}
+
+/// The glTF and its first scene, watched until both loaded (a panicking loader is told in
+/// our line meanwhile).
+#[derive(Resource)]
+struct SceneHandles([UntypedHandle; 2], LoaderPanicCapture);
 
 fn load(mut commands: Commands, path: Res<ScenePath>, assets: Res<AssetServer>) {
-    let name = path.0.file_name().map(|n| n.to_string_lossy().into_owned());
-    let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(name.unwrap_or_default()));
+    let gltf: Handle<Gltf> = assets.load(path.name.clone());
+    let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(path.name.clone()));
+    commands.insert_resource(SceneHandles(
+        [gltf.untyped(), scene.clone().untyped()],
+        LoaderPanicCapture::start(),
+    ));
     commands.spawn(WorldAssetRoot(scene));
+}
+
+/// A glTF the loader refuses: one line, the path and the loader's reason, and exit status 2.
+fn refused(
+    mut commands: Commands,
+    handles: Option<Res<SceneHandles>>,
+    path: Res<ScenePath>,
+    assets: Res<AssetServer>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    let Some(handles) = handles else {
+        return;
+    };
+    let states = handles.0.each_ref().map(|h| assets.load_state(h));
+    if let Some(LoadState::Failed(e)) = states.iter().find(|s| s.is_failed()) {
+        eprintln!(
+            "error: cannot load {}: {}",
+            path.given.display(),
+            load_failure_reason(e)
+        );
+        exit.write(AppExit::from_code(2));
+    }
+    if states.iter().all(|s| s.is_loaded() || s.is_failed()) {
+        commands.remove_resource::<SceneHandles>();
+    }
 }
 
 /// The glTF's camera gets caustics and the orbit controls; without one, a camera is added

@@ -22,6 +22,7 @@ use bevy_caustics::reference::{CausticImage, ImageMetrics, compare};
 use bevy_caustics::{
     AapsSettings, CausticsTechnique, CausticsVolume, ImageSpaceSettings, PhotonMapSettings,
 };
+use clap::Parser;
 use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
 
@@ -170,63 +171,67 @@ fn levels(technique: CausticsTechnique) -> Vec<(String, RenderJob)> {
     }
 }
 
+/// The scenes measured by default.
+const SCENES: &str = "mirror_wall,glass_slab,glass_sphere,pool,ring,empty";
+/// The techniques measured by default.
+const TECHNIQUES: &str = "reference,aaps,volume,image_space,photon_map";
+
+/// Error against run time for every scene and technique: writes REPORT.md (a summary table,
+/// every run) and, per scene, one SVG of FLIP and one of RMSE against milliseconds.
+///
+/// Each scene is compared against a converged reference image (the reference technique at
+/// 2^23 photons per light, 2^28 for pool) cached in assets/reference/, computed first when
+/// missing or made by another recipe. About 10 minutes on lavapipe. Errors print one line and exit
+/// with status 2.
+#[derive(Parser, Debug)]
+#[command(name = "report", args_override_self = true)]
+struct Cli {
+    /// Scenes of assets/scenes/ to measure, comma-separated names (any other scene there
+    /// works too: its reference is computed first).
+    #[arg(long, value_name = "A,B,...", default_value = SCENES)]
+    scenes: String,
+    /// Techniques to measure, comma-separated: reference, aaps, volume, image_space,
+    /// photon_map.
+    #[arg(long, value_name = "A,B,...", default_value = TECHNIQUES)]
+    techniques: String,
+    /// Folder REPORT.md and the SVGs are written to.
+    #[arg(long, value_name = "DIR", default_value_os_t = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("report"))]
+    out: PathBuf,
+    /// Side of the square renders, pixels.
+    #[arg(long, value_name = "PIXELS", default_value_t = 128, value_parser = integer)]
+    size: u32,
+}
+
+/// `--size`: an integer.
+fn integer(v: &str) -> Result<u32, String> {
+    v.parse()
+        .map_err(|_| format!("expects an integer, got '{v}'"))
+}
+
 fn main() {
     bevy_caustics::headless::quiet_headless_environment();
-    if let Err(e) = real_main() {
+    // A usage error (unknown option, bad value) prints clap's message and exits 2.
+    let cli = Cli::parse();
+    if let Err(e) = real_main(cli) {
         eprintln!("error: {e}");
         std::process::exit(2);
     }
 }
 
-fn real_main() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+fn real_main(cli: Cli) -> Result<(), String> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut scenes: Vec<String> = [
-        "mirror_wall",
-        "glass_slab",
-        "glass_sphere",
-        "pool",
-        "ring",
-        "empty",
-    ]
-    .map(String::from)
-    .to_vec();
-    let mut techniques = vec![
-        CausticsTechnique::Reference,
-        CausticsTechnique::Aaps,
-        CausticsTechnique::Volume,
-        CausticsTechnique::ImageSpace,
-        CausticsTechnique::PhotonMap,
-    ];
-    let mut out = root.join("report");
-    let mut size = 128u32;
-    let mut i = 0;
-    while i < args.len() {
-        let v = args
-            .get(i + 1)
-            .ok_or_else(|| format!("{} needs a value", args[i]))?;
-        match args[i].as_str() {
-            "--scenes" => scenes = v.split(',').map(String::from).collect(),
-            "--techniques" => {
-                techniques = v
-                    .split(',')
-                    .map(|t| {
-                        CausticsTechnique::from_name(t).ok_or_else(|| {
-                            format!("unknown technique '{t}' (available: reference, aaps, volume, image_space, photon_map)")
-                        })
-                    })
-                    .collect::<Result<_, _>>()?
-            }
-            "--out" => out = PathBuf::from(v),
-            "--size" => {
-                size = v
-                    .parse()
-                    .map_err(|_| format!("--size expects an integer, got '{v}'"))?
-            }
-            o => return Err(format!("unknown option {o}")),
-        }
-        i += 2;
-    }
+    let scenes: Vec<String> = cli.scenes.split(',').map(String::from).collect();
+    let techniques = cli
+        .techniques
+        .split(',')
+        .map(|t| {
+            CausticsTechnique::from_name(t).ok_or_else(|| {
+                format!("unknown technique '{t}' (available: reference, aaps, volume, image_space, photon_map)")
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let out = cli.out;
+    let size = cli.size;
     let adapter = find_adapter()?;
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let runs: Vec<(CausticsTechnique, Vec<(String, RenderJob)>)> =

@@ -4,11 +4,12 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use bevy::app::{AppExit, ScheduleRunnerPlugin};
-use bevy::asset::{AssetPlugin, LoadState, RenderAssetUsages};
+use bevy::asset::{AssetPlugin, LoadState, RenderAssetUsages, UntypedHandle};
 use bevy::camera::{Hdr, RenderTarget};
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore, FrameCount};
 use bevy::light::{DirectionalLight, PointLight, SpotLight};
+use bevy::log::LogPlugin;
 use bevy::pbr::DefaultOpaqueRendererMethod;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
@@ -23,6 +24,9 @@ use serde::Serialize;
 use super::adapter::{decode_f16_rgba, tonemap_preview, unpad_rows};
 use super::check::check_job;
 use super::counters::{AapsCounters, ImageSpaceCounters, PhotonMapCounters, decode_photons};
+use super::load_error::{
+    LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
+};
 use crate::limits::CausticsLimits;
 use crate::reference::{
     CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceProgress, ReferenceStatus,
@@ -256,10 +260,16 @@ enum Phase {
 #[derive(Resource)]
 struct Handles {
     scene: Handle<bevy::gltf::Gltf>,
+    /// The glTF's `Scene0` (fails alone when the glTF has no scene).
+    root: UntypedHandle,
     target: Handle<Image>,
     twin: Option<Handle<Image>>,
     right: Option<Handle<Image>>,
 }
+
+/// Held while the scene loads: a panicking loader is told in our error line, not printed.
+#[derive(Resource)]
+struct LoadingScene(LoaderPanicCapture);
 
 #[derive(Component)]
 struct MainCamera;
@@ -291,6 +301,13 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     let scene = std::fs::canonicalize(&job.scene)
         .map_err(|e| format!("cannot open {}: {e}", job.scene.display()))?;
     let dir = scene.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+    // A glTF the loader refuses is this job's error, in one line: the asset server's own
+    // ERROR about it (once per handle, with a backtrace under RUST_BACKTRACE) stays quiet.
+    report_load_failures_of(&asset_name(&job.scene));
+    let log = LogPlugin {
+        custom_layer: quiet_reported_load_failures,
+        ..default()
+    };
     let shared = Shared::default();
     let mut app = App::new();
     let asset = AssetPlugin {
@@ -311,12 +328,13 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         ..default()
     };
     if job.window {
-        app.add_plugins(DefaultPlugins.set(asset).set(render));
+        app.add_plugins(DefaultPlugins.set(asset).set(render).set(log));
     } else {
         app.add_plugins(
             DefaultPlugins
                 .set(asset)
                 .set(render)
+                .set(log)
                 .set(WindowPlugin {
                     primary_window: None,
                     exit_condition: ExitCondition::DontExit,
@@ -334,6 +352,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         app.insert_resource(DefaultOpaqueRendererMethod::forward());
     }
     app.insert_resource(Job(job.clone()))
+        .insert_resource(LoadingScene(LoaderPanicCapture::start()))
         .insert_resource(shared.clone())
         .init_resource::<Phase>()
         .add_systems(Startup, start)
@@ -386,16 +405,10 @@ fn start(
     assets: Res<AssetServer>,
     mut images: ResMut<Assets<Image>>,
 ) {
-    let name = job
-        .0
-        .scene
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = asset_name(&job.0.scene);
     let scene = assets.load(name.clone());
-    commands.spawn(WorldAssetRoot(
-        assets.load(GltfAssetLabel::Scene(0).from_asset(name)),
-    ));
+    let root = assets.load(GltfAssetLabel::Scene(0).from_asset(name));
+    commands.spawn(WorldAssetRoot(root.clone()));
     let format = if job.0.linear {
         TextureFormat::Rgba16Float
     } else {
@@ -424,10 +437,19 @@ fn start(
     let right = job.0.stereo.map(|_| target_image(format));
     commands.insert_resource(Handles {
         scene,
+        root: root.untyped(),
         target,
         twin,
         right,
     });
+}
+
+/// The scene's path for the asset server: its file name (the asset root is its folder).
+fn asset_name(scene: &std::path::Path) -> String {
+    scene
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 fn format_bytes(f: TextureFormat) -> usize {
@@ -478,15 +500,23 @@ fn drive(
     };
     match *phase {
         Phase::Loading => {
-            match assets.load_state(&handles.scene) {
-                LoadState::Failed(e) => {
-                    return fail(
-                        format!("cannot load {}: {e}", job.0.scene.display()),
-                        &mut exit,
-                    );
-                }
-                LoadState::Loaded => *phase = Phase::Spawned(0),
-                _ => {}
+            let states = [
+                assets.load_state(&handles.scene),
+                assets.load_state(&handles.root),
+            ];
+            if let Some(LoadState::Failed(e)) = states.iter().find(|s| s.is_failed()) {
+                return fail(
+                    format!(
+                        "cannot load {}: {}",
+                        job.0.scene.display(),
+                        load_failure_reason(e)
+                    ),
+                    &mut exit,
+                );
+            }
+            if states.iter().all(LoadState::is_loaded) {
+                commands.remove_resource::<LoadingScene>();
+                *phase = Phase::Spawned(0);
             }
             if frames.0 > 3000 {
                 fail(

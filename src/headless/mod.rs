@@ -8,6 +8,7 @@ mod adapter;
 mod check;
 mod counters;
 mod job;
+mod load_error;
 mod volume;
 
 pub use crate::volume::volume_from_extras;
@@ -15,4 +16,7 @@ pub use adapter::{adapter_limits, decode_f16_rgba, find_adapter, quiet_headless_
 pub use check::check_job;
 pub use counters::*;
 pub use job::*;
+pub use load_error::{
+    LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
+};
 pub use volume::VolumeCounters;
