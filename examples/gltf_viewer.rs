@@ -14,12 +14,9 @@ use bevy::asset::{LoadState, UntypedHandle};
 use bevy::camera::Exposure;
 use bevy::camera::primitives::Aabb;
 use bevy::gltf::Gltf;
-use bevy::log::LogPlugin;
 use bevy::prelude::*;
 use bevy_caustics::CausticsInspectorPlugin;
-use bevy_caustics::headless::{
-    LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
-};
+use bevy_caustics::headless::{LoaderPanicCapture, load_failure_reason, report_load_failures_of};
 use bevy_caustics::mark_every_light;
 use bevy_caustics::prelude::*;
 use clap::Parser;
@@ -69,10 +66,7 @@ fn main() -> AppExit {
         .unwrap_or_default();
     // A file the loader refuses is told in one line by `refused`, not by the asset server.
     report_load_failures_of(&name);
-    let log = LogPlugin {
-        custom_layer: quiet_reported_load_failures,
-        ..default()
-    };
+    let log = bevy_caustics::headless::tool_log_plugin();
     App::new()
         .add_plugins((
             DefaultPlugins.set(asset).set(log),

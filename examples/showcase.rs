@@ -78,10 +78,10 @@ fn setup(
         },
         GeneratedEnvironmentMapLight {
             environment_map: sky,
-            intensity: SKY_LUMINANCE,
+            intensity: AMBIENT_LUMINANCE,
             ..default()
         },
-        OrbitCamera::looking_at(Vec3::new(1.2, 2.3, 4.8), Vec3::new(0.2, 0.2, 0.0)),
+        OrbitCamera::looking_at(Vec3::new(2.4, 2.2, 4.3), Vec3::new(0.8, 0.2, -0.1)),
         Name::new("camera"),
     ));
     commands.spawn((
@@ -177,7 +177,7 @@ fn setup(
             Color::linear_rgb(0.9, 0.6, 0.2),
             0.15,
         )),
-        Transform::from_xyz(1.7, 0.8, -1.2).with_rotation(Quat::from_rotation_z(0.25)),
+        Transform::from_xyz(2.0, 0.8, -1.0).with_rotation(Quat::from_rotation_z(0.25)),
         Name::new("amber glass block"),
     ));
     // A polished ring on the floor: its inside focuses a cardioid.
@@ -189,7 +189,7 @@ fn setup(
             perceptual_roughness: 0.05,
             ..default()
         })),
-        Transform::from_xyz(2.5, 0.11, 0.9).with_rotation(Quat::from_rotation_x(-FRAC_PI_2)),
+        Transform::from_xyz(2.5, 0.11, 1.2).with_rotation(Quat::from_rotation_x(-FRAC_PI_2)),
         Name::new("mirror ring"),
     ));
     // A gem (diamond, IOR 2.42), faceted, turning slowly.
@@ -206,7 +206,7 @@ fn setup(
             ),
         ),
         MeshMaterial3d(glass(&mut materials, 2.42, Color::WHITE, f32::INFINITY)),
-        Transform::from_xyz(0.5, 0.9, 1.3).with_scale(Vec3::new(1.0, 0.6, 1.0)),
+        Transform::from_xyz(1.3, 0.8, 0.4).with_scale(Vec3::new(1.0, 0.6, 1.0)),
         Name::new("gem"),
     ));
 }
@@ -217,7 +217,10 @@ const BALL_RADIUS: f32 = 0.35;
 /// along the sun's rays (50 degrees high), on the floor.
 const BALL_HEIGHT: f32 = 1.5 * BALL_RADIUS * 0.766;
 /// The sky's luminance at the zenith, cd/m² (a clear blue sky is a few thousand).
-const SKY_LUMINANCE: f32 = 6000.0;
+const SKY_LUMINANCE: f32 = 2500.0;
+/// The environment light's luminance, cd/m²: lower than the sky seen, so the sky adds
+/// about a fifth of the sun's 10 000 lux on the floor and the caustics keep their contrast.
+const AMBIENT_LUMINANCE: f32 = 700.0;
 /// The sun's elevation, radians.
 const SUN_ELEVATION: f32 = 50.0 * PI / 180.0;
 
@@ -414,7 +417,7 @@ fn cube_direction(face: u32, u: f32, v: f32) -> Vec3 {
 
 /// Relative sky luminance towards `d` (1 at the zenith's blue).
 fn sky_radiance(d: Vec3) -> Vec3 {
-    let zenith = Vec3::new(0.30, 0.50, 1.00);
+    let zenith = Vec3::new(0.18, 0.38, 1.00);
     let horizon = Vec3::new(0.85, 0.92, 1.05);
     let ground = Vec3::new(0.50, 0.48, 0.44);
     if d.y < 0.0 {

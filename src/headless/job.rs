@@ -9,7 +9,6 @@ use bevy::camera::{Hdr, RenderTarget};
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore, FrameCount};
 use bevy::light::{DirectionalLight, PointLight, SpotLight};
-use bevy::log::LogPlugin;
 use bevy::pbr::DefaultOpaqueRendererMethod;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
@@ -24,9 +23,7 @@ use serde::Serialize;
 use super::adapter::{decode_f16_rgba, tonemap_preview, unpad_rows};
 use super::check::check_job;
 use super::counters::{AapsCounters, ImageSpaceCounters, PhotonMapCounters, decode_photons};
-use super::load_error::{
-    LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
-};
+use super::load_error::{LoaderPanicCapture, load_failure_reason, report_load_failures_of};
 use crate::limits::CausticsLimits;
 use crate::reference::{
     CausticImage, CausticsReferenceImage, ImageMetrics, ReferenceProgress, ReferenceStatus,
@@ -304,10 +301,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     // A glTF the loader refuses is this job's error, in one line: the asset server's own
     // ERROR about it (once per handle, with a backtrace under RUST_BACKTRACE) stays quiet.
     report_load_failures_of(&asset_name(&job.scene));
-    let log = LogPlugin {
-        custom_layer: quiet_reported_load_failures,
-        ..default()
-    };
+    let log = super::tool_log_plugin();
     let shared = Shared::default();
     let mut app = App::new();
     let asset = AssetPlugin {

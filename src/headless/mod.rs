@@ -18,5 +18,6 @@ pub use counters::*;
 pub use job::*;
 pub use load_error::{
     LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
+    tool_log_plugin,
 };
 pub use volume::VolumeCounters;
