@@ -46,6 +46,10 @@ pub struct RenderJob {
     pub photons: Option<u64>,
     /// Frames rendered and measured once the caustics are ready.
     pub frames: u32,
+    /// The first this many of `frames` are left out of the pass times (render diagnostics
+    /// arrive a few frames late, and AAPS's task buffer adapts from a uniform start).
+    /// Default 3.
+    pub warmup_frames: u32,
     /// Seed.
     pub seed: u64,
     /// Open a window instead of rendering offscreen (needs a display).
@@ -113,6 +117,7 @@ impl Default for RenderJob {
             height: 256,
             photons: None,
             frames: 8,
+            warmup_frames: 3,
             seed: 1,
             window: false,
             linear: false,
@@ -142,6 +147,9 @@ impl Default for RenderJob {
 pub struct RenderReport {
     /// Adapter name (and backend).
     pub adapter: String,
+    /// The adapter's driver and driver version, as wgpu reports them (`AdapterInfo::driver`,
+    /// `driver_info`), and its device type (`Cpu` for lavapipe).
+    pub driver: String,
     /// Technique name.
     pub technique: String,
     /// Width, height.
@@ -151,6 +159,10 @@ pub struct RenderReport {
     pub pass_ms: BTreeMap<String, f64>,
     /// "gpu" or "cpu": which clock `pass_ms` comes from.
     pub timing: String,
+    /// The caustics passes' summed time of every measured frame whose diagnostics arrived,
+    /// in order, ms, on the clock of `timing` (its median is the frame's total; the sum of
+    /// the per-pass medians need not be).
+    pub frame_ms: Vec<f64>,
     /// Photons traced (emitted) for the caustics buffer.
     pub photons_traced: u64,
     /// Photons that reached a visible pixel.
@@ -207,9 +219,14 @@ pub struct RenderReport {
     pub frame_passes: Vec<Vec<String>>,
 }
 
-/// This frame's GPU and CPU time of every caustics pass that recorded one, appended to
-/// `samples` under `"{pass}@gpu"` / `"{pass}@cpu"`.
-fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut BTreeMap<String, Vec<f64>>) {
+/// The GPU and CPU time of every caustics pass in the newest frame's render diagnostics,
+/// appended to `samples.passes` under `"{pass}@gpu"` / `"{pass}@cpu"`, with the frame's sum
+/// per clock in `samples.frame_totals`. Spans of one name in one frame (a volume slab's near
+/// and far G-buffers) are summed. A pass that did not run in that frame adds nothing, and
+/// neither does a call before the next frame's diagnostics arrived (rather than repeating the
+/// last values).
+fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut PassSamples) {
+    let mut found = Vec::new();
     for pass in std::iter::once(COMPOSITE_PASS)
         .chain(crate::render::aaps::passes::ALL_PASSES)
         .chain(crate::render::volume::passes::all_passes())
@@ -218,14 +235,54 @@ fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut BTreeMap<Stri
     {
         for (clock, name) in [("gpu", "elapsed_gpu"), ("cpu", "elapsed_cpu")] {
             let path = DiagnosticPath::new(format!("render/{pass}/{name}"));
-            if let Some(v) = diagnostics.get(&path).and_then(|d| d.value()) {
-                samples
-                    .entry(format!("{pass}@{clock}"))
-                    .or_default()
-                    .push(v);
+            if let Some((d, time)) = diagnostics
+                .get(&path)
+                .and_then(|d| d.measurement().map(|m| (d, m.time)))
+            {
+                found.push((pass, clock, d, time));
             }
         }
     }
+    // One sync stamps all of a frame's diagnostics with the same time.
+    let Some(newest) = found.iter().map(|f| f.3).max() else {
+        return;
+    };
+    if samples.last.is_some_and(|t| newest <= t) {
+        return;
+    }
+    samples.last = Some(newest);
+    let mut totals: BTreeMap<&str, f64> = BTreeMap::new();
+    for (pass, clock, d, _) in found.into_iter().filter(|f| f.3 == newest) {
+        let ms: f64 = d
+            .measurements()
+            .filter(|m| m.time == newest)
+            .map(|m| m.value)
+            .sum();
+        samples
+            .passes
+            .entry(format!("{pass}@{clock}"))
+            .or_default()
+            .push(ms);
+        *totals.entry(clock).or_default() += ms;
+    }
+    for (clock, ms) in totals {
+        samples
+            .frame_totals
+            .entry(clock.to_string())
+            .or_default()
+            .push(ms);
+    }
+}
+
+/// Pass times gathered over the measured frames ([`sample_pass_times`]).
+#[derive(Default)]
+struct PassSamples {
+    /// Per `"{pass}@{clock}"`, one value per frame the pass ran in, ms.
+    passes: BTreeMap<String, Vec<f64>>,
+    /// Per clock, the sum over the passes of every sampled frame, ms.
+    frame_totals: BTreeMap<String, Vec<f64>>,
+    /// When the newest diagnostics sampled were synced.
+    last: Option<bevy::platform::time::Instant>,
 }
 
 #[derive(Resource, Clone)]
@@ -241,7 +298,7 @@ struct Outcome {
     twin_raw: Vec<u8>,
     snapshot: Option<crate::render::readback::CausticsSnapshot>,
     finished: bool,
-    pass_samples: BTreeMap<String, Vec<f64>>,
+    pass_samples: PassSamples,
 }
 
 #[derive(Resource, Default, PartialEq, Debug, Clone, Copy)]
@@ -364,6 +421,10 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
         render_app.add_systems(RenderStartup, move |info: Res<RenderAdapterInfo>| {
             if let Ok(mut o) = s.0.lock() {
                 o.report.adapter = format!("{} ({:?})", info.name, info.backend);
+                o.report.driver = format!(
+                    "{} {} ({:?})",
+                    info.driver, info.driver_info, info.device_type
+                );
             }
         });
     }
@@ -383,7 +444,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
                 .into(),
         );
     }
-    let samples = std::mem::take(&mut o.pass_samples);
+    let samples = std::mem::take(&mut o.pass_samples.passes);
     for (k, mut v) in samples {
         v.sort_by(f64::total_cmp);
         if !v.is_empty() {
@@ -576,7 +637,7 @@ fn drive(
             }
             let mut o = shared.0.lock().expect("state");
             // Diagnostics arrive a few frames late: sample after a warm-up.
-            if n >= 3 {
+            if n >= job.0.warmup_frames {
                 sample_pass_times(&diagnostics, &mut o.pass_samples);
             }
             let frame: Vec<String> = log.take().into_iter().map(String::from).collect();
@@ -798,15 +859,15 @@ fn finish_report(
     o.report.size = [w, h];
     o.report.warnings = warnings.messages.clone();
     // Prefer GPU timestamps; fall back to CPU spans where the adapter has none.
-    let gpu: Vec<_> = o
-        .pass_samples
-        .keys()
-        .filter(|k| k.ends_with("@gpu"))
-        .cloned()
-        .collect();
-    let clock = if gpu.is_empty() { "cpu" } else { "gpu" };
+    let gpu = o.pass_samples.passes.keys().any(|k| k.ends_with("@gpu"));
+    let clock = if gpu { "gpu" } else { "cpu" };
     o.report.timing = clock.to_string();
-    o.pass_samples = std::mem::take(&mut o.pass_samples)
+    o.report.frame_ms = o
+        .pass_samples
+        .frame_totals
+        .remove(clock)
+        .unwrap_or_default();
+    o.pass_samples.passes = std::mem::take(&mut o.pass_samples.passes)
         .into_iter()
         .filter_map(|(k, v)| {
             k.strip_suffix(&format!("@{clock}"))
