@@ -76,7 +76,7 @@ pub enum CausticsSystems {
 /// Adds caustics to cameras with [`Caustics`].
 ///
 /// The composite adds caustic light to the deferred G-buffer's receivers, so the plugin makes
-/// [`OpaqueRendererMethod::Deferred`](bevy::pbr::OpaqueRendererMethod) the app's default
+/// [`OpaqueRendererMethod::Deferred`](bevy::material::OpaqueRendererMethod::Deferred) the app's default
 /// opaque method ([`DefaultOpaqueRendererMethod`]) when it is added, with one `info!` if it
 /// replaces Bevy's forward default. To keep forward rendering, insert
 /// `DefaultOpaqueRendererMethod::forward()` *after* adding the plugin: receivers rendered

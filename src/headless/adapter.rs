@@ -67,7 +67,7 @@ pub fn find_adapter() -> Result<String, String> {
 }
 
 /// The maxima ([`CausticsLimits`]) of the adapter [`find_adapter`] names: Bevy requests its
-/// device at the adapter's own limits, so a job that passes [`check_job`] with these fits.
+/// device at the adapter's own limits, so a job that passes [`check_job`](super::check_job) with these fits.
 pub fn adapter_limits() -> Result<CausticsLimits, String> {
     first_adapter()
         .map(|a| CausticsLimits::new(&a.limits()))

@@ -45,14 +45,16 @@ pub fn quiet_reported_load_failures(_: &mut App) -> Option<BoxedLayer> {
     Some(Box::new(QuietReported))
 }
 
-/// The tools' log: warnings and errors only (Bevy's start-up INFO lines and the "software
-/// rendering" warning of a CPU adapter such as lavapipe are left out), with the asset
+/// The tools' log: warnings and errors only (Bevy's start-up INFO lines, the "software
+/// rendering" warning of a CPU adapter such as lavapipe and bevy_egui's note on a missing
+/// texture-binding-array feature are left out), with the asset
 /// server's errors about files the tool reports itself dropped
 /// ([`quiet_reported_load_failures`]). `RUST_LOG` still overrides it.
 pub fn tool_log_plugin() -> bevy::log::LogPlugin {
     bevy::log::LogPlugin {
         level: Level::WARN,
-        filter: "wgpu=error,naga=warn,bevy_render::renderer=error".to_string(),
+        filter: "wgpu=error,naga=warn,bevy_render::renderer=error,bevy_egui::render=error"
+            .to_string(),
         custom_layer: quiet_reported_load_failures,
         ..Default::default()
     }

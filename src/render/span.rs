@@ -19,7 +19,7 @@ use bevy::render::renderer::{RenderAdapterInfo, RenderDevice};
 use bevy::render::{RenderApp, RenderStartup};
 use wgpu::{QuerySet, QuerySetDescriptor, QueryType};
 
-/// The scratch timestamp query of [`settle_span`] (`None` where it is not needed).
+/// The scratch timestamp query of `settle_span` (`None` where it is not needed).
 #[derive(Resource, Default)]
 pub struct SpanSettle(Option<QuerySet>);
 

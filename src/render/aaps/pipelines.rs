@@ -67,7 +67,7 @@ pub struct AapsPipelines {
     /// resolve `Rgba32Float`).
     pub splat_msaa: Option<CachedRenderPipelineId>,
     /// `trace`, specialised by the scene's features (`render::trace`), queued by
-    /// [`queue_aaps_trace_variant`] the first time a scene needs the variant (no frame traces
+    /// `queue_aaps_trace_variant` the first time a scene needs the variant (no frame traces
     /// before it is compiled).
     pub trace: crate::render::trace::TraceVariants,
 }

@@ -65,7 +65,7 @@ pub struct ImageSpacePipelines {
     pub compute: [CachedComputePipelineId; 6],
     /// `trace`, specialised by the scene (`render::trace::TraceFeatures`: without a
     /// dielectric, no refraction, Fresnel split, caster-back march or Beer-Lambert), queued by
-    /// [`queue_image_space_trace_variant`] the first time a scene needs the variant.
+    /// `queue_image_space_trace_variant` the first time a scene needs the variant.
     pub trace: crate::render::trace::TraceVariants,
     /// Opaque, caster-front and caster-back RSM layers.
     pub rsm: [CachedRenderPipelineId; 3],

@@ -78,7 +78,7 @@ pub struct PhotonMapPipelines {
     /// Group 0 of the grid build.
     pub grid_layout: BindGroupLayoutDescriptor,
     /// `pm_trace`, specialised by the scene's features (`render::trace`), queued by
-    /// [`queue_photon_map_trace_variant`].
+    /// `queue_photon_map_trace_variant`.
     pub trace: crate::render::trace::TraceVariants,
     /// `pm_gather`.
     pub gather: CachedComputePipelineId,

@@ -211,7 +211,7 @@ pub struct VolumeGpu {
     pub sig: Signatures,
     /// First slab touched by changes not run yet (`slabs`: projectors only); `None`: none.
     pub change: Option<u32>,
-    /// This frame's update ([`schedule_run`]); `None`: nothing re-runs.
+    /// This frame's update (`volume::progressive::schedule_run`); `None`: nothing re-runs.
     pub run: Option<VolumeRun>,
     /// Set by the passes when they ran `run`.
     pub ran: AtomicBool,
