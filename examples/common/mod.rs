@@ -452,7 +452,7 @@ fn report_egui_windows(
     mut frame: Local<u32>,
 ) {
     *frame += 1;
-    if *frame % 10 != 0 {
+    if !(*frame).is_multiple_of(10) {
         return;
     }
     for mut ctx in &mut contexts {
