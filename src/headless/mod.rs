@@ -9,6 +9,7 @@ mod check;
 mod counters;
 mod job;
 mod load_error;
+mod report;
 mod volume;
 
 pub use crate::volume::volume_from_extras;
@@ -20,4 +21,5 @@ pub use load_error::{
     LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
     tool_log_plugin,
 };
+pub use report::RenderReport;
 pub use volume::VolumeCounters;
