@@ -408,32 +408,14 @@ fn drive(
         exit.write(AppExit::error());
     };
     match *phase {
-        Phase::Loading => {
-            let states = [
-                assets.load_state(&handles.scene),
-                assets.load_state(&handles.root),
-            ];
-            if let Some(LoadState::Failed(e)) = states.iter().find(|s| s.is_failed()) {
-                return fail(
-                    format!(
-                        "cannot load {}: {}",
-                        job.0.scene.display(),
-                        load_failure_reason(e)
-                    ),
-                    &mut exit,
-                );
-            }
-            if states.iter().all(LoadState::is_loaded) {
+        Phase::Loading => match scene_loaded(&assets, &handles, &job.0, frames.0) {
+            Err(msg) => fail(msg, &mut exit),
+            Ok(true) => {
                 commands.remove_resource::<LoadingScene>();
                 *phase = Phase::Spawned(0);
             }
-            if frames.0 > 3000 {
-                fail(
-                    format!("timed out loading {}", job.0.scene.display()),
-                    &mut exit,
-                );
-            }
-        }
+            Ok(false) => {}
+        },
         Phase::Spawned(n) => {
             // Give the scene a few frames to spawn.
             if n < 3 {
@@ -572,6 +554,31 @@ fn drive(
             exit.write(AppExit::Success);
         }
     }
+}
+
+/// Stage `Loading`: `Ok(true)` once the glTF and its scene are loaded; `Err` with one line if
+/// the loader refused the file (the path and its reason) or it took over 3000 frames.
+fn scene_loaded(
+    assets: &AssetServer,
+    handles: &Handles,
+    job: &RenderJob,
+    frame: u32,
+) -> Result<bool, String> {
+    let states = [
+        assets.load_state(&handles.scene),
+        assets.load_state(&handles.root),
+    ];
+    if let Some(LoadState::Failed(e)) = states.iter().find(|s| s.is_failed()) {
+        return Err(format!(
+            "cannot load {}: {}",
+            job.scene.display(),
+            load_failure_reason(e)
+        ));
+    }
+    if frame > 3000 {
+        return Err(format!("timed out loading {}", job.scene.display()));
+    }
+    Ok(states.iter().all(LoadState::is_loaded))
 }
 
 /// Stage `Spawned`: the glTF's camera (deactivated) gives its projection and transform to the
