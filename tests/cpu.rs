@@ -12,10 +12,20 @@ fn unit(v: (f32, f32, f32)) -> Vec3 {
     Vec3::new(v.0, v.1, v.2).try_normalize().unwrap_or(Vec3::Y)
 }
 
+/// `n` cases from a fixed seed, so CI runs the same inputs every time; `PROPTEST_RNG_SEED=<u64>`
+/// explores others (a failure prints the seed and the minimal input).
 fn cases(n: u32) -> ProptestConfig {
+    let default = ProptestConfig::default();
+    let rng_seed = match default.rng_seed {
+        proptest::test_runner::RngSeed::Random => {
+            proptest::test_runner::RngSeed::Fixed(0xCA05_71C5)
+        }
+        fixed => fixed,
+    };
     ProptestConfig {
         cases: n,
-        ..ProptestConfig::default()
+        rng_seed,
+        ..default
     }
 }
 
@@ -252,14 +262,24 @@ proptest! {
     }
 
     /// Reciprocity (Stokes): R from outside at θi equals R from inside at θt.
+    ///
+    /// Near grazing θi the inside side sits just short of the critical angle, where f32 cannot
+    /// hold `cos θt` closely enough: one rounding of it moves the outside angle by
+    /// `ior² cos θt / cos θi` times as much. The tolerance adds that condition number times
+    /// the input's rounding (2 ulp) times the slope dR/dcos θi, so it is the error a correct
+    /// f32 implementation can have (0.05 % plus ~0.1 % at cos θi = 0.01, IOR 4), no more.
     #[test]
     fn fresnel_reciprocity(cos_i in 0.01f32..=1.0, ior in 1.0f32..=4.0) {
         let eta = 1.0 / ior;
-        let sin_t = eta * (1.0 - cos_i * cos_i).sqrt();
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
+        let sin_t = f64::from(eta) * (1.0 - f64::from(cos_i).powi(2)).sqrt();
+        let cos_t = (1.0 - sin_t * sin_t).sqrt() as f32;
         let a = fresnel_dielectric(cos_i, eta);
         let b = fresnel_dielectric(cos_t, ior);
-        prop_assert!((a - b).abs() < 5e-4, "{} vs {}", a, b);
+        let h = 1e-3 * cos_i;
+        let slope = (fresnel_dielectric(cos_i + h, eta) - fresnel_dielectric(cos_i - h, eta)).abs() / (2.0 * h);
+        let condition = ior * ior * cos_t / cos_i;
+        let tolerance = 5e-4 + slope * condition * 2.0 * f32::EPSILON;
+        prop_assert!((a - b).abs() < tolerance, "{} vs {} (tolerance {})", a, b, tolerance);
     }
 
     /// Beyond the critical angle everything reflects and refraction reports TIR.
