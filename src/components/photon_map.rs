@@ -72,6 +72,17 @@ pub struct PhotonMapSettings {
     /// irradiance where both eyes see the same point. Default true. `false` makes the right
     /// eye gather every pixel itself (it still shares the left eye's photons and grid).
     pub stereo_reuse: bool,
+    /// Per-frame budget of specular events (reflections and refractions, summed over every
+    /// photon's path), as a multiple of the photons the frame emits: the trace casts at most
+    /// `photons · (1 + bounce_budget)` rays whatever the scene. Roulette ends paths whose
+    /// flux a chain has reduced, but clear glass keeps a path's throughput at 1, so without
+    /// it a glass asset that traps light in internal reflections makes every photon run to
+    /// `max_bounces`. Default 8 (as `AapsSettings::bounce_budget`; the gem room uses under 5
+    /// per photon). Paths in flight when the budget is spent stop there, counted as
+    /// `budget_stopped` with their flux in `flux_max_depth`; the dispatch's later photons
+    /// (the last lights') stop first. Range [0.05, 128].
+    #[reflect(@0.05_f32..=128.0_f32)]
+    pub bounce_budget: f32,
 }
 
 impl Default for PhotonMapSettings {
@@ -87,6 +98,7 @@ impl Default for PhotonMapSettings {
             shared_memory: false,
             mirrors: true,
             stereo_reuse: true,
+            bounce_budget: 8.0,
         }
     }
 }
@@ -108,6 +120,7 @@ impl PhotonMapSettings {
             shared_memory: self.shared_memory,
             mirrors: self.mirrors,
             stereo_reuse: self.stereo_reuse,
+            bounce_budget: f(self.bounce_budget, d.bounce_budget, 0.05, 128.0),
         }
     }
 }

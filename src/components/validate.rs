@@ -245,7 +245,8 @@ pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> 
         max_bounces,
         splat_capacity,
         budget_floor_share,
-        point_splat_area
+        point_splat_area,
+        bounce_budget
     );
     *a = fixed;
     fixes
@@ -286,7 +287,8 @@ pub fn sanitize_photon_map(a: &mut PhotonMapSettings, _limits: &CausticsLimits) 
         max_grid_cells,
         alpha,
         max_frames,
-        normal_threshold
+        normal_threshold,
+        bounce_budget
     );
     *a = fixed;
     fixes

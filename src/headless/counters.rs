@@ -42,8 +42,14 @@ pub struct AapsCounters {
     /// Luminous flux reaching diffuse surfaces after a specular path, in view or not, before
     /// any culling.
     pub flux_deposited: f64,
-    /// Luminous flux still in flight when a path reached `max_bounces`.
+    /// Luminous flux still in flight when a path reached `max_bounces` or the frame's event
+    /// budget ran out (`budget_stopped`).
     pub flux_max_depth: f64,
+    /// Specular events traced (reflections and refractions, all paths).
+    pub events: u64,
+    /// Paths stopped because the frame's specular-event budget
+    /// ([`crate::AapsSettings::bounce_budget`]) was spent.
+    pub budget_stopped: u64,
     /// Non-zero words in the last splat inside the splat buffer's capacity (16 when it holds a
     /// splat).
     pub splat_last_words: u64,
@@ -81,6 +87,8 @@ impl AapsCounters {
             flux_on_casters: f4(16),
             flux_deposited: f4(20),
             flux_max_depth: f4(24),
+            events: c(29),
+            budget_stopped: c(30),
             splat_last_words: nonzero(&snap.splat_guard[..16]),
             splat_guard_written: nonzero(&snap.splat_guard[16..]),
         }
@@ -178,8 +186,14 @@ pub struct PhotonMapCounters {
     /// Luminous flux reaching diffuse surfaces after a specular path, in view or not, stored or
     /// past the capacity.
     pub flux_deposited: f64,
-    /// Luminous flux still in flight when a path reached `max_bounces`.
+    /// Luminous flux still in flight when a path reached `max_bounces` or the frame's event
+    /// budget ran out (`budget_stopped`).
     pub flux_max_depth: f64,
+    /// Specular events traced (reflections and refractions, all paths).
+    pub events: u64,
+    /// Paths stopped because the frame's specular-event budget
+    /// ([`crate::PhotonMapSettings::bounce_budget`]) was spent.
+    pub budget_stopped: u64,
     /// Grid cells (X·Y·Z) and the grid's dimensions.
     pub grid_cells: u64,
     /// X, Y, Z.
@@ -213,7 +227,16 @@ pub struct PhotonMapCounters {
 }
 
 impl PhotonMapCounters {
-    /// From the counter words of a readback (the header's first 32 words).
+    /// From a readback: the header's first 32 words and its event-budget words.
+    pub fn from_snapshot(snap: &crate::render::readback::CausticsSnapshot) -> Self {
+        let mut c = Self::from_words(&snap.counters);
+        c.events = snap.extra[0] as u64;
+        c.budget_stopped = snap.extra[1] as u64;
+        c
+    }
+
+    /// From the counter words of a readback (the header's first 32 words; the event-budget
+    /// counters stay 0).
     pub fn from_words(w: &[u32]) -> Self {
         let c = |i: usize| w.get(i).copied().unwrap_or(0) as u64;
         // A 64-bit fixed-point flux counter from word `i` (`C_FLUX_*` in photon.wgsl), lm.
@@ -242,6 +265,8 @@ impl PhotonMapCounters {
             flux_on_casters: flux(25),
             flux_deposited: flux(27),
             flux_max_depth: flux(29),
+            events: 0,
+            budget_stopped: 0,
             grid_cells: c(8),
             grid_dims: [c(21), c(22), c(23)],
             coarsened: c(9),

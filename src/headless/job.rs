@@ -753,7 +753,7 @@ fn finish_report(
     } else if job.technique == CausticsTechnique::PhotonMap
         && let Some(snap) = o.snapshot.take()
     {
-        let c = PhotonMapCounters::from_words(&snap.counters);
+        let c = PhotonMapCounters::from_snapshot(&snap);
         o.report.photons_traced = c.photons_emitted;
         o.report.photons_in_view = c.photons_stored;
         o.report.photon_map_photons = decode_photons(&snap.photons, c.photons_stored as usize);

@@ -27,6 +27,11 @@ pub const COUNTER_WORDS: usize = 32;
 /// Words of the AAPS splat buffer's tail read back (after the counters): the last splat inside
 /// the capacity, then the guard region past it.
 pub const GUARD_WORDS: usize = (1 + SPLAT_GUARD_SPLATS as usize) * 16;
+/// Counter words past a technique's first 32, read back after the guard words (the photon
+/// map's event-budget words, `C_EVENTS..` in src/render/photon_map/photon.wgsl).
+pub const EXTRA_WORDS: usize = 4;
+/// Words read back after the image: counters, the splat guard, the extra counters.
+const TAIL_WORDS: usize = COUNTER_WORDS + GUARD_WORDS + EXTRA_WORDS;
 
 #[derive(Default)]
 struct State {
@@ -50,6 +55,9 @@ pub struct CausticsSnapshot {
     /// guard region past it (zeros unless something wrote past the capacity). Zeros for other
     /// techniques.
     pub splat_guard: [u32; GUARD_WORDS],
+    /// The photon map's counter words past its first 32 (`C_EVENTS`, `C_BUDGET_STOPPED`;
+    /// zeros for other techniques).
+    pub extra: [u32; EXTRA_WORDS],
     /// The caustics buffer's alpha per pixel (the photon map marks pixels showing a mirror
     /// with -1).
     pub alpha: Vec<f32>,
@@ -108,7 +116,7 @@ impl CausticsReadback {
             }
         }
         let photons = data
-            .get(row * h + (COUNTER_WORDS + GUARD_WORDS) * 4..)
+            .get(row * h + TAIL_WORDS * 4..)
             .unwrap_or_default()
             .to_vec();
         let word = |i: usize| {
@@ -117,10 +125,12 @@ impl CausticsReadback {
         };
         let counters = std::array::from_fn(word);
         let splat_guard = std::array::from_fn(|i| word(COUNTER_WORDS + i));
+        let extra = std::array::from_fn(|i| word(COUNTER_WORDS + GUARD_WORDS + i));
         Some(CausticsSnapshot {
             image,
             counters,
             splat_guard,
+            extra,
             alpha,
             photons,
         })
@@ -161,9 +171,7 @@ fn copy_for_readback(
     let photons = photon_map.filter(|_| s.photons).map(|p| &p.photons);
     let staging = ctx.render_device().create_buffer(&BufferDescriptor {
         label: Some("caustics:readback"),
-        size: image_bytes
-            + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64
-            + photons.map_or(0, |p| p.size()),
+        size: image_bytes + (TAIL_WORDS * 4) as u64 + photons.map_or(0, |p| p.size()),
         usage: BufferUsages::MAP_READ | BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -234,9 +242,16 @@ fn copy_for_readback(
             image_bytes,
             Some((COUNTER_WORDS * 4) as u64),
         );
+        encoder.copy_buffer_to_buffer(
+            &state.header,
+            super::photon_map::view::EXTRA_COUNTERS_AT * 4,
+            &staging,
+            image_bytes + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64,
+            Some((EXTRA_WORDS * 4) as u64),
+        );
     }
     if let Some(p) = photons {
-        let at = image_bytes + ((COUNTER_WORDS + GUARD_WORDS) * 4) as u64;
+        let at = image_bytes + (TAIL_WORDS * 4) as u64;
         encoder.copy_buffer_to_buffer(p, 0, &staging, at, Some(p.size()));
     }
     let ready = Arc::new(AtomicBool::new(false));

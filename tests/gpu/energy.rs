@@ -123,7 +123,7 @@ fn aaps_closed_form_energy() {
         let err = c.flux_deposited / expect - 1.0;
         let on_err = c.flux_on_casters / ref_on - 1.0;
         println!(
-            "{}: AAPS on caster {:.1} lm (reference {ref_on:.1}, {:+.2} %), receivers {:.1} lm (expected {expect:.1}, {:+.2} %; reference {ref_out:.1}), in flight at the cap {:.3} lm ({} paths), splits {}, tir {}",
+            "{}: AAPS on caster {:.1} lm (reference {ref_on:.1}, {:+.2} %), receivers {:.1} lm (expected {expect:.1}, {:+.2} %; reference {ref_out:.1}), in flight at the cap {:.3} lm ({} paths), splits {}, tir {}, events {} ({:.2} per photon), stopped by the event budget {}",
             desc.name,
             c.flux_on_casters,
             on_err * 100.0,
@@ -132,7 +132,10 @@ fn aaps_closed_form_energy() {
             c.flux_max_depth,
             c.max_depth,
             c.splits,
-            c.tir
+            c.tir,
+            c.events,
+            c.events as f64 / c.photons_emitted.max(1) as f64,
+            c.budget_stopped
         );
         assert_eq!(c.nan_guards, 0, "{}", desc.name);
         assert!(
@@ -175,7 +178,7 @@ fn photon_map_closed_form_energy() {
         let err = c.flux_deposited / expect - 1.0;
         let on_err = c.flux_on_casters / ref_on - 1.0;
         println!(
-            "{}: photon map on caster {:.1} lm (reference {ref_on:.1}, {:+.2} %), deposited {:.1} lm (expected {expect:.1}, {:+.2} %; reference {ref_out:.1}), in flight at the cap {:.3} lm ({} paths), roulette {} paths, tir {}, emitted {}, stored {}",
+            "{}: photon map on caster {:.1} lm (reference {ref_on:.1}, {:+.2} %), deposited {:.1} lm (expected {expect:.1}, {:+.2} %; reference {ref_out:.1}), in flight at the cap {:.3} lm ({} paths), roulette {} paths, tir {}, emitted {}, stored {}, events {} ({:.2} per photon), stopped by the event budget {}",
             desc.name,
             c.flux_on_casters,
             on_err * 100.0,
@@ -186,7 +189,10 @@ fn photon_map_closed_form_energy() {
             c.roulette,
             c.tir,
             c.photons_emitted,
-            c.photons_stored
+            c.photons_stored,
+            c.events,
+            c.events as f64 / c.photons_emitted.max(1) as f64,
+            c.budget_stopped
         );
         assert_eq!(c.nan_guards, 0, "{}", desc.name);
         assert_eq!(c.overflow, 0, "{}", desc.name);
@@ -319,4 +325,74 @@ fn volume_open_gem_matches_reference() {
         "{:+.2} %",
         m.energy_error * 100.0
     );
+}
+
+/// The per-frame event budget (issue 32 item 1) on the gem room, where the average photon goes
+/// through 4.2 specular events: with `bounce_budget` 0.05 (one event per 20 photons of the
+/// frame's budget) AAPS and the photon map trace at most that many events, stop the paths in flight
+/// when it is spent (counted), and keep their flux: what reaches the receivers plus what was
+/// in flight when the paths stopped equals the power on the gem within 3 % (the rooms' closed
+/// form; AAPS's split and the photon map's Fresnel choices are unbiased, so the in-flight flux
+/// is the expected flux those paths still carried).
+#[test]
+fn event_budget_bounds_the_trace_and_keeps_the_flux() {
+    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    if !require_gpu() {
+        return;
+    }
+    let desc = closed::gem_room();
+    let photons = 1u64 << 18;
+    let budget = (photons as f64 * 0.05).ceil() as u64;
+    let job = |technique| RenderJob {
+        scene: write(&desc),
+        technique,
+        width: 64,
+        height: 64,
+        photons: Some(photons),
+        frames: 3,
+        aaps: AapsSettings {
+            bounce_budget: 0.05,
+            ..Default::default()
+        },
+        photon_map: PhotonMapSettings {
+            bounce_budget: 0.05,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let aaps = run(job(CausticsTechnique::Aaps)).unwrap();
+    let a = aaps.aaps.clone().expect("AAPS counters");
+    let pm = run(job(CausticsTechnique::PhotonMap)).unwrap();
+    let p = pm.photon_map.clone().expect("photon map counters");
+    let cases = [
+        (
+            "AAPS",
+            a.events,
+            a.budget_stopped,
+            a.flux_on_casters,
+            a.flux_deposited,
+            a.flux_max_depth,
+        ),
+        (
+            "photon map",
+            p.events,
+            p.budget_stopped,
+            p.flux_on_casters,
+            p.flux_deposited,
+            p.flux_max_depth,
+        ),
+    ];
+    for (name, events, stopped, on, deposited, in_flight) in cases {
+        let err = (deposited + in_flight) / on - 1.0;
+        println!(
+            "gem_room, bounce_budget 0.05, {name}: events {events} (budget {budget}), stopped by the budget {stopped}, on the gem {on:.1} lm, receivers {deposited:.1} lm + in flight {in_flight:.1} lm ({:+.2} %)",
+            err * 100.0
+        );
+        assert!(events <= budget, "{name}: {events} events past the budget");
+        assert!(stopped > 0, "{name}: the budget stopped nothing");
+        assert!(err.abs() < 0.03, "{name}: {:+.2} %", err * 100.0);
+    }
+    for report in [&aaps, &pm] {
+        assert!(report.caustics.as_ref().unwrap().all_finite());
+    }
 }

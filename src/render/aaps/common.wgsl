@@ -29,8 +29,11 @@ const C_PHOTON_OVERFLOW: u32 = 14u; // photons past the photon capacity
 const C_SPLIT: u32 = 15u;         // photons split at a dielectric
 const C_FLUX_CASTER: u32 = 16u;   // 4 words, f32 bits: luminous flux striking casters (first hit)
 const C_FLUX_DEPOSITED: u32 = 20u; // 4 words, f32 bits: flux reaching a diffuse surface (before culling)
-const C_FLUX_MAX_DEPTH: u32 = 24u; // 4 words, f32 bits: flux in flight at max bounces
+const C_FLUX_MAX_DEPTH: u32 = 24u; // 4 words, f32 bits: flux in flight at max bounces or when the event budget ran out
 const C_CONTRIBUTING: u32 = 28u;  // texels with an accepted splat (density update)
+const C_EVENTS: u32 = 29u;        // specular events traced (reflections, refractions)
+const C_BUDGET_STOPPED: u32 = 30u; // paths stopped by the frame's event budget (flux in C_FLUX_MAX_DEPTH)
+const C_EVENTS_GRANTED: u32 = 31u; // event budget handed out (chunks of 1, 2, 4, then 8 per thread)
 const ACCUM_TEXELS: u32 = 32u;    // per texel: area sum (f32 bits), accepted count, variance (f32 bits), 0
 
 fn accum_add_f32(i: u32, v: f32) {

@@ -140,7 +140,7 @@ fn deposit(path: ptr<function, Path>, pos: vec3<f32>, pu: vec3<f32>, pv: vec3<f3
 }
 
 // Follow one path to its diffuse hit; a split stores the reflected branch in `pending`.
-fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending: ptr<function, bool>, texel: u32, texel_energy: f32) {
+fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending: ptr<function, bool>, events: ptr<function, EventBudget>, texel: u32, texel_energy: f32) {
     let scale = params.camera.w;
     let max_bounces = params.caps.z;
     // Energy words are spread over 4 slots to lower contention on the float CAS loop.
@@ -194,6 +194,13 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
         }
         if (*path).bounces >= max_bounces {
             atomicAdd(&accum[C_MAX_DEPTH], 1u);
+            accum_add_f32(C_FLUX_MAX_DEPTH + slot4, luminance((*path).flux));
+            return;
+        }
+        let budget = u32(params.budget.z);
+        if !(event_take(events) || event_grant(events, atomicAdd(&accum[C_EVENTS_GRANTED], (*events).next), budget)) {
+            // The frame's event budget is spent: the flux in flight is counted, not lost.
+            atomicAdd(&accum[C_BUDGET_STOPPED], 1u);
             accum_add_f32(C_FLUX_MAX_DEPTH + slot4, luminance((*path).flux));
             return;
         }
@@ -321,9 +328,16 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     let texel_energy = luminance(texel_power);
     var pending: Path;
     var has_pending = false;
-    run_path(&path, &pending, &has_pending, texel, texel_energy);
+    var events = event_budget();
+    run_path(&path, &pending, &has_pending, &events, texel, texel_energy);
     if has_pending {
         var none = false;
-        run_path(&pending, &path, &none, texel, texel_energy);
+        run_path(&pending, &path, &none, &events, texel, texel_energy);
+    }
+    if events.used != 0u {
+        atomicAdd(&accum[C_EVENTS], events.used);
+    }
+    if events.left != 0u {
+        atomicSub(&accum[C_EVENTS_GRANTED], events.left);
     }
 }

@@ -374,7 +374,11 @@ pub fn params_bytes(
     ] {
         f(v);
     }
-    for v in [s.budget_floor_share, s.point_splat_area, 0.0, 0.0] {
+    // The frame's specular-event budget (AapsSettings::bounce_budget), an integer < 2^31.
+    let events = (state.budget * s.bounce_budget as f64)
+        .clamp(1.0, 2.0e9)
+        .ceil();
+    for v in [s.budget_floor_share, s.point_splat_area, events as f32, 0.0] {
         f(v);
     }
     b

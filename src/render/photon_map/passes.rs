@@ -33,7 +33,7 @@ pub const ALL_PASSES: [&str; 4] = [TRACE_PASS, GRID_PASS, GATHER_PASS, GATHER_RI
 
 /// Counters read into diagnostics (`render/caustics/photon_map/<name>`), by header word
 /// (`C_*` in photon.wgsl).
-pub const PHOTON_MAP_COUNTERS: [(&str, u64); 10] = [
+pub const PHOTON_MAP_COUNTERS: [(&str, u64); 12] = [
     ("caustics/photon_map/emitted", 0),
     ("caustics/photon_map/stored", 1),
     ("caustics/photon_map/overflow", 4),
@@ -44,6 +44,8 @@ pub const PHOTON_MAP_COUNTERS: [(&str, u64); 10] = [
     ("caustics/photon_map/coarsened", 9),
     ("caustics/photon_map/gathered", 12),
     ("caustics/photon_map/gathered_max", 13),
+    ("caustics/photon_map/events", 50),
+    ("caustics/photon_map/budget_stopped", 51),
 ];
 
 fn compute_pass(

@@ -37,7 +37,7 @@ const C_FRAME: u32 = 24u;         // the progressive frame shown (1-based)
 // Luminous flux, 64-bit fixed point (low word, then high word; PM_FLUX_SCALE units per lm):
 const C_FLUX_CASTER: u32 = 25u;    // 2 words: striking the casters (photons' first hits)
 const C_FLUX_DEPOSITED: u32 = 27u; // 2 words: reaching a diffuse surface after a specular event
-const C_FLUX_MAX_DEPTH: u32 = 29u; // 2 words: in flight when a path reached the bounce limit
+const C_FLUX_MAX_DEPTH: u32 = 29u; // 2 words: in flight when a path reached the bounce limit or the event budget
 const C_ROULETTE: u32 = 31u;       // paths ended by Russian roulette
 
 // Units per lumen of the flux counters (`FLUX_SCALE` in src/render/photon_map/view.rs).
@@ -53,6 +53,11 @@ const H_SHIFT: u32 = 44u;   // cell doublings
 const H_ORIGIN: u32 = 45u;  // 3 words, f32 bits
 const H_CELL: u32 = 48u;    // f32 bits
 const H_INV: u32 = 49u;     // f32 bits
+
+// Header words 50..54: the event budget's counters (read back; EXTRA_COUNTERS_AT in view.rs).
+const C_EVENTS: u32 = 50u;          // specular events traced (reflections, refractions)
+const C_BUDGET_STOPPED: u32 = 51u;  // paths stopped by the frame's event budget (flux in C_FLUX_MAX_DEPTH)
+const C_EVENTS_GRANTED: u32 = 52u;  // event budget handed out (chunks of 1, 2, 4, then 8 per thread)
 
 // 1D index of a 2D dispatch of `width`-wide workgroups.
 fn flat_index(gid: vec3<u32>, groups: vec3<u32>, width: u32) -> u32 {

@@ -21,7 +21,7 @@ struct PmParams {
     view: vec4<f32>,     // width, height (px), r² of this frame (m²), normal threshold
     emit: vec4<u32>,     // photons per light, lights, max bounces, capacity
     frame: vec4<u32>,    // R2 rotation x, y, frame seed, flags (FLAG_*)
-    gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, 0, 0
+    gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, specular-event budget of the frame, 0
     lens: vec4<f32>,     // focal lengths fx, fy (px); z 1 for a perspective camera (footprint floor)
     forward: vec4<f32>,  // the camera's forward axis (xyz)
     other_eye: vec4<f32>, // the left eye's position (xyz), for a right eye that reuses
@@ -43,16 +43,18 @@ const FLAG_REUSE: u32 = 16u;     // this view is a right eye: reuse the left eye
 struct PathEnd {
     // 0 nothing, 1 emitted and stored (`pos`..`n` hold it), 2 emitted and not stored.
     state: u32,
-    // Outcome counters: C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_ROULETTE as 1 << (k), TIR
-    // count in bits 8+.
+    // Outcome counters: C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_ROULETTE, C_BUDGET_STOPPED as
+    // 1 << (k), TIR count in bits 8+.
     counts: u32,
     pos: vec3<f32>,
     d: vec3<f32>,
     flux: vec3<f32>,
     n: vec3<f32>,
     // Luminous flux (lm) striking the first caster, deposited at the diffuse hit (stored or
-    // past the capacity), in flight at the bounce limit (C_FLUX_*).
+    // past the capacity), in flight at the bounce limit or the event budget (C_FLUX_*).
     energy: vec3<f32>,
+    // Specular events traced.
+    events: u32,
 }
 
 const END_DIRECT: u32 = 1u;
@@ -60,6 +62,7 @@ const END_MISSED: u32 = 2u;
 const END_MAX_DEPTH: u32 = 4u;
 const END_NAN: u32 = 8u;
 const END_ROULETTE: u32 = 16u;
+const END_BUDGET: u32 = 32u;
 // Roulette's uniforms come from the photon's key with this bit set in the event index, apart
 // from the Fresnel choices' (optics_hash_unit(key, bounces)).
 const ROULETTE_STREAM: u32 = 0x10000u;
@@ -87,6 +90,8 @@ fn trace_photon(i: u32) -> PathEnd {
     var medium = INVALID;
     var bounces = 0u;
     var tir = 0u;
+    var events = event_budget();
+    let budget = u32(params.gather.z);
     // max_bounces <= 128 specular events (PhotonMapSettings::sanitized), then the diffuse one.
     for (var guard = 0u; guard < 130u; guard += 1u) {
         let hit = bvh_closest_hit(o, d, 0.0, BVH_FAR);
@@ -138,6 +143,12 @@ fn trace_photon(i: u32) -> PathEnd {
             }
             flux /= q;
         }
+        if !(event_take(&events) || event_grant(&events, atomicAdd(&header[C_EVENTS_GRANTED], events.next), budget)) {
+            // The frame's event budget is spent: the flux in flight is counted, not lost.
+            end.counts |= END_BUDGET;
+            end.energy.z = luminance(flux);
+            break;
+        }
         bounces += 1u;
         if s.kind == MAT_CONDUCTOR {
             flux *= optics_fresnel_schlick(-dot(d, s.ns_f), scene_material(hit.instance, 2u).xyz);
@@ -178,6 +189,10 @@ fn trace_photon(i: u32) -> PathEnd {
 #endif
     }
     end.counts |= min(tir, 0xffffffu) << 8u;
+    end.events = events.used;
+    if events.left != 0u {
+        atomicSub(&header[C_EVENTS_GRANTED], events.left);
+    }
     return end;
 }
 
@@ -204,15 +219,16 @@ fn add_flux(at: u32, v: f32, u: f32) -> bool {
     return true;
 }
 
-// Workgroup sums: emitted, stored, direct, missed, max depth, NaN, roulette, TIR; and the
-// luminous flux of each photon (on casters, deposited, at the cap), summed by a tree.
-var<workgroup> wg_counts: array<atomic<u32>, 8>;
+// Workgroup sums: emitted, stored, direct, missed, max depth, NaN, roulette, budget stopped,
+// TIR, events; and the luminous flux of each photon (on casters, deposited, at the cap or the
+// budget), summed by a tree.
+var<workgroup> wg_counts: array<atomic<u32>, 10>;
 var<workgroup> wg_base: u32;
 var<workgroup> wg_energy: array<vec3<f32>, 64>;
 
 @compute @workgroup_size(64)
 fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>) {
-    if lid < 8u {
+    if lid < 10u {
         atomicStore(&wg_counts[lid], 0u);
     }
     workgroupBarrier();
@@ -224,13 +240,16 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if end.state == 1u {
         local = atomicAdd(&wg_counts[1], 1u);
     }
-    for (var k = 0u; k < 5u; k += 1u) {
+    for (var k = 0u; k < 6u; k += 1u) {
         if (end.counts & (1u << k)) != 0u {
             atomicAdd(&wg_counts[2u + k], 1u);
         }
     }
     if (end.counts >> 8u) != 0u {
-        atomicAdd(&wg_counts[7], end.counts >> 8u);
+        atomicAdd(&wg_counts[8], end.counts >> 8u);
+    }
+    if end.events != 0u {
+        atomicAdd(&wg_counts[9], end.events);
     }
     wg_energy[lid] = end.energy;
     workgroupBarrier();
@@ -246,8 +265,8 @@ fn pm_trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         wg_base = base;
         let cap = params.emit.w;
         let over = select(0u, base + stored - max(base, cap), base + stored > cap);
-        let words = array<u32, 8>(C_EMITTED, 0u, C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_ROULETTE, C_TIR);
-        for (var k = 0u; k < 8u; k += 1u) {
+        let words = array<u32, 10>(C_EMITTED, 0u, C_DIRECT, C_MISSED, C_MAX_DEPTH, C_NAN, C_ROULETTE, C_BUDGET_STOPPED, C_TIR, C_EVENTS);
+        for (var k = 0u; k < 10u; k += 1u) {
             let v = atomicLoad(&wg_counts[k]);
             if k != 1u && v != 0u {
                 atomicAdd(&header[words[k]], v);

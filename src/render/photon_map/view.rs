@@ -12,8 +12,11 @@ use crate::render::ExtractedCaustics;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::{CausticsTechnique, PhotonMapSettings};
 
-/// Words of the header buffer: counters (0..32, read back) and the grid's layout (32..64).
+/// Words of the header buffer: counters (0..32, read back), the grid's layout (32..50) and the
+/// event-budget counters (50..54, read back).
 pub const HEADER_WORDS: u64 = 64;
+/// First of the event-budget counter words (`C_EVENTS` in photon.wgsl).
+pub const EXTRA_COUNTERS_AT: u64 = 50;
 /// Header word: photons stored by the trace (`H_COUNT` in photon.wgsl).
 pub const H_COUNT: usize = 1;
 /// Header words of the grid's layout (`H_*` in photon.wgsl): X, Y, Z.
@@ -418,7 +421,14 @@ fn write_uniforms(
         ],
     );
     let frame = state.frame.max(1);
-    f32s(&mut b, &[1.0 / frame as f32, frame as f32, 0.0, 0.0]);
+    // The frame's specular-event budget (PhotonMapSettings::bounce_budget).
+    let events = (state.per_light as f64 * state.lights as f64 * s.bounce_budget as f64)
+        .clamp(1.0, 2.0e9)
+        .ceil();
+    f32s(
+        &mut b,
+        &[1.0 / frame as f32, frame as f32, events as f32, 0.0],
+    );
     let p = view.clip_from_view;
     let perspective = p.w_axis.w == 0.0;
     f32s(

@@ -129,3 +129,42 @@ fn light_emit(light: GpuLight, uv: vec2<f32>) -> Emission {
 #endif
     return e;
 }
+
+// A thread's share of the frame's specular-event budget (`bounce_budget` of AAPS and the photon
+// map), which bounds a trace's cost whatever the scene's chains of internal reflections: the
+// thread takes events from the technique's shared count in chunks of 1, 2, 4, then 8, so a
+// path of a few events wastes at most about one and a long path pays one atomic per eight;
+// a thread gives back what it did not use when it ends (`left`). At the call site, with the
+// shared count `granted`:
+//     event_take(&b) || event_grant(&b, atomicAdd(&granted, b.next), budget)
+// When the budget binds, the paths of the dispatch's later threads stop first.
+struct EventBudget {
+    left: u32,
+    next: u32,
+    used: u32,
+}
+
+fn event_budget() -> EventBudget {
+    return EventBudget(0u, 1u, 0u);
+}
+
+// One event from the events this thread already holds.
+fn event_take(b: ptr<function, EventBudget>) -> bool {
+    if (*b).left == 0u {
+        return false;
+    }
+    (*b).left -= 1u;
+    (*b).used += 1u;
+    return true;
+}
+
+// The shared count stood at `old` before this thread added `(*b).next` to it: hold what is left
+// of the budget up to that and take one event; false once the frame's budget is spent.
+fn event_grant(b: ptr<function, EventBudget>, old: u32, budget: u32) -> bool {
+    if old >= budget {
+        return false;
+    }
+    (*b).left = min((*b).next, budget - old);
+    (*b).next = min(2u * (*b).next, 8u);
+    return event_take(b);
+}
