@@ -25,6 +25,8 @@ mod image_space;
 mod pay_for_use;
 #[path = "gpu/photon_map.rs"]
 mod photon_map;
+#[path = "gpu/thin.rs"]
+mod thin;
 #[path = "gpu/twins.rs"]
 mod twins;
 #[path = "gpu/volume.rs"]

@@ -4,7 +4,8 @@
 // (view depth along the light's axis, normal x, normal y, ±(instance + 1)) with the sign
 // carrying normal z, and w = 0 where the layer is empty:
 // - `fs_opaque`: the nearest receiver (casters are transparent to the marches);
-// - `fs_front`: the nearest caster surface facing the light (where photons start);
+// - `fs_front`: the nearest caster surface facing the light (where photons start), a thin
+//   wall's either face;
 // - `fs_back`: the nearest caster surface facing away from the light (where a photon
 //   refracted into a closed object leaves it; the paper stops at one interface).
 // Concatenated after optics.wgsl by src/render/image_space/pipelines.rs.
@@ -58,8 +59,12 @@ fn rsm_texel(in: ROut, layer: u32) -> vec4<f32> {
     }
     var facing = dot(n, dir) < 0.0;
     // A mirror reflects on both sides: its front layer faces the light either way, and it has
-    // no back layer (nothing enters it).
-    if kind == 2u && !facing {
+    // no back layer (nothing enters it). A thin wall (glTF thickness 0) has air on both sides:
+    // lit on either face it is a front (turned to face the light), and its faces turned away
+    // stay in the back layer (a closed thin shell's far wall; the trace tells a single sheet,
+    // its own back, from it).
+    let thin = kind == 1u && mats[3u * in.inst].z > 0.5;
+    if (kind == 2u || (thin && layer == 1u)) && !facing {
         n = -n;
         facing = true;
     }

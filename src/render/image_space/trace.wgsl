@@ -467,6 +467,39 @@ fn camera_stage(x: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, light_hit: bool, se
     deposit(m.pos, d, flux, seed);
 }
 
+#ifdef TRACE_DIELECTRICS
+// Through a thin wall (air on both sides, no bending) from `o` along `d`: the far wall of a
+// closed thin shell (the caster-back layer, nearer than any receiver) passes `1 - F` again,
+// 1 / ior, straight (the thick exit's rule: the reflected part is dropped). A single sheet lit
+// on its back is its own back layer at the start texel (same instance, same depth): nothing
+// more. Returns the ray's new origin.
+fn thin_far_wall(v: SpaceView, texel: vec2<i32>, front: vec4<f32>, inst: u32, o: vec3<f32>, d: vec3<f32>, flux: ptr<function, vec3<f32>>, t_max: f32, scale: f32) -> vec3<f32> {
+    let own = textureLoad(rsm, texel, i32(light.misc.w) + 2, 0);
+    if own.w != 0.0 && u32(abs(own.w)) - 1u == inst && abs(own.x - front.x) <= 1.0e-4 * max(abs(front.x), 1.0) {
+        return o;
+    }
+    let to_back = march(v, 2u, o, d, t_max);
+    if !to_back.hit {
+        return o;
+    }
+    let to_floor = march(v, 1u, o, d, t_max);
+    if to_floor.hit && distance(o, to_floor.pos) <= distance(o, to_back.pos) {
+        return o;
+    }
+    let back = textureLoad(rsm, to_back.px, i32(light.misc.w) + 2, 0);
+    if back.w == 0.0 {
+        return o;
+    }
+    let mb = mats[3u * (u32(abs(back.w)) - 1u)];
+    if mb.z <= 0.5 {
+        return o;  // a thick object's back face: its front was never crossed
+    }
+    let nb = rsm_normal(back);
+    *flux *= 1.0 - optics_fresnel_dielectric(abs(dot(d, nb)), optics_dielectric_eta(mb.y, true, true));
+    return optics_offset_ray_origin(to_back.pos, select(nb, -nb, dot(d, nb) < 0.0), scale);
+}
+#endif
+
 @compute @workgroup_size(64)
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = gid.y * groups.x * 64u + gid.x;
@@ -515,6 +548,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let t_max = 4.0 * scale;
     var d = dir_in;
     var inside = false;
+    var thin_through = false;
     // Without a dielectric in the scene (shader def TRACE_DIELECTRICS off) every caster is a
     // mirror: no Fresnel split, refraction, caster-back march or Beer-Lambert is compiled.
 #ifdef TRACE_DIELECTRICS
@@ -531,6 +565,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             d = optics_reflect(dir_in, n);
         } else if m0.z > 0.5 {
             d = dir_in;  // thin sheet: no bending
+            thin_through = true;
         } else {
             let t = optics_refract(dir_in, n, eta);
             d = t.xyz;
@@ -577,6 +612,11 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         d = t.xyz;
         let out_side = select(nb, -nb, dot(d, nb) < 0.0);
         o = optics_offset_ray_origin(to_back.pos, out_side, scale);
+    }
+#endif
+#ifdef TRACE_DIELECTRICS
+    if thin_through {
+        o = thin_far_wall(v, texel, front, inst, o, d, &flux, t_max, scale);
     }
 #endif
     let m = march(v, 1u, o, d, t_max);

@@ -168,16 +168,17 @@ fn interact(p: ptr<function, VolPhoton>, n: vec3<f32>, inst: u32, rng: ptr<funct
         return 1u;
     }
     // Dielectric: the P_med and hemisphere rules (optics::media_interface; the depth test
-    // "between G_near and G_far" is the caller's).
+    // "between G_near and G_far" is the caller's). A thin wall has air on both sides: no
+    // medium to enter or leave, so it is an interface whichever face the photon meets (a pane
+    // lit on its back, a closed thin shell's far wall), 1 / ior from either, never TIR.
     let inside = (flags & F_MEDIUM) != 0u;
     let enter = !inside && c < 0.0;
     let exit = inside && c > 0.0;
-    if !enter && !exit {
+    let thin = m0.z > 0.5;
+    if !enter && !exit && !(thin && abs(c) > 0.0) {
         count(C_IGNORED);
         return 0u;
     }
-    // A thin wall has air on both sides: 1 / ior from either, never TIR.
-    let thin = m0.z > 0.5;
     let eta = optics_dielectric_eta(m0.y, enter, thin);
     if exit {
         // Beer-Lambert over the length travelled inside.
