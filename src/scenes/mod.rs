@@ -6,6 +6,7 @@ pub mod closed;
 pub mod cornell;
 pub mod geometry;
 pub mod gltf;
+pub mod many;
 pub mod stiff;
 
 use std::sync::Arc;
