@@ -50,6 +50,8 @@ pub fn glass_sheet() -> SceneDesc {
     let film = s.material("label_film", glass(1.5, 0.0), true);
     s.add("floor", geometry::quad(14.0, 14.0), floor, Vec3::ZERO);
     let (nx, nz) = SHEET_GRID;
+    // One mesh per material, instanced (as an exporter writes repeated parts).
+    let mut first: [Option<usize>; 4] = [None; 4];
     for i in 0..nx {
         for k in 0..nz {
             let at = Vec3::new(
@@ -57,19 +59,32 @@ pub fn glass_sheet() -> SceneDesc {
                 0.6,
                 (k as f32 - (nz - 1) as f32 * 0.5) * 0.7,
             );
-            let odd = (i + k) % 2 == 1;
-            s.add(
-                &format!("ball_{i}_{k}"),
-                geometry::uv_sphere(0.25, 12, 6),
-                if odd { thin } else { thick },
-                at,
-            );
-            s.add(
-                &format!("label_{i}_{k}"),
-                geometry::quad(0.4, 0.15),
-                if k % 2 == 1 { film } else { paper },
-                Vec3::new(at.x + 0.15, 0.95, at.z),
-            );
+            let ball = ((i + k) % 2) as usize;
+            let label = 2 + (k % 2) as usize;
+            for (slot, name, pos) in [
+                (ball, format!("ball_{i}_{k}"), at),
+                (
+                    label,
+                    format!("label_{i}_{k}"),
+                    Vec3::new(at.x + 0.15, 0.95, at.z),
+                ),
+            ] {
+                first[slot] = Some(match first[slot] {
+                    Some(node) => {
+                        s.instance(&name, node, pos);
+                        node
+                    }
+                    None => {
+                        let (mesh, material) = match slot {
+                            0 => (geometry::uv_sphere(0.25, 12, 6), thick),
+                            1 => (geometry::uv_sphere(0.25, 12, 6), thin),
+                            2 => (geometry::quad(0.4, 0.15), paper),
+                            _ => (geometry::quad(0.4, 0.15), film),
+                        };
+                        s.add(&name, mesh, material, pos)
+                    }
+                });
+            }
         }
     }
     sun(&mut s, Vec3::new(0.2, -1.0, 0.15));
@@ -89,6 +104,7 @@ pub fn glass_engine() -> SceneDesc {
     let metal = s.material("metal", mirror(0.9), true);
     s.add("floor", geometry::quad(14.0, 14.0), floor, Vec3::ZERO);
     let (nx, nz) = ENGINE_GRID;
+    let mut first: [Option<usize>; 6] = [None; 6];
     for i in 0..nx {
         for k in 0..nz {
             let n = i * nz + k;
@@ -97,17 +113,30 @@ pub fn glass_engine() -> SceneDesc {
                 0.2 + 0.1 * (n % 3) as f32,
                 (k as f32 - (nz - 1) as f32 * 0.5) * 0.6,
             );
-            let (mesh, material) = match n % 5 {
-                0 => (geometry::cylinder(0.15, 0.35, 16), thick),
-                1 => (geometry::cuboid(Vec3::new(0.3, 0.25, 0.3)), thin),
-                2 => (geometry::ring(0.2, 0.15, 24), metal),
-                3 => (geometry::torus(0.16, 0.06, 16, 8), thick),
-                _ if n % 2 == 0 => (geometry::cuboid(Vec3::new(0.35, 0.1, 0.2)), metal),
-                _ => (geometry::cuboid(Vec3::new(0.2, 0.3, 0.2)), thick),
+            // One mesh per kind, instanced.
+            let kind = match n % 5 {
+                4 if n % 2 == 0 => 4,
+                4 => 5,
+                k => k as usize,
             };
             // Every seventh part hovers 0.5 m higher, over its neighbour's caustic.
             let at = at + Vec3::Y * if n % 7 == 6 { 0.5 } else { 0.0 };
-            let part = s.add(&format!("part_{n}"), mesh, material, at);
+            let name = format!("part_{n}");
+            let part = match first[kind] {
+                Some(node) => s.instance(&name, node, at),
+                None => {
+                    let (mesh, material) = match kind {
+                        0 => (geometry::cylinder(0.15, 0.35, 16), thick),
+                        1 => (geometry::cuboid(Vec3::new(0.3, 0.25, 0.3)), thin),
+                        2 => (geometry::ring(0.2, 0.15, 24), metal),
+                        3 => (geometry::torus(0.16, 0.06, 16, 8), thick),
+                        4 => (geometry::cuboid(Vec3::new(0.35, 0.1, 0.2)), metal),
+                        _ => (geometry::cuboid(Vec3::new(0.2, 0.3, 0.2)), thick),
+                    };
+                    s.add(&name, mesh, material, at)
+                }
+            };
+            first[kind] = Some(first[kind].unwrap_or(part));
             s.nodes[part].rotation = Quat::from_rotation_y(0.3 * n as f32)
                 * Quat::from_rotation_x(0.25 * (n % 4) as f32);
             if n % 4 == 3 {

@@ -180,6 +180,19 @@ impl SceneDesc {
         self.nodes.len() - 1
     }
 
+    /// Add a node that instances the mesh (and the material: glTF keeps it on the mesh) of node
+    /// `of` at `translation`; returns the new node's index.
+    pub fn instance(&mut self, name: &str, of: usize, translation: Vec3) -> usize {
+        self.nodes.push(NodeDesc {
+            name: name.into(),
+            translation,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+            ..self.nodes[of].clone()
+        });
+        self.nodes.len() - 1
+    }
+
     /// The traceable scene: TLAS over all nodes, lights in Bevy units (as Bevy imports
     /// them: directional lux unchanged, point and spot `candela x 4π` lumens), and the
     /// camera at `width x height`.
