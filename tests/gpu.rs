@@ -21,6 +21,8 @@ mod examples;
 mod first_use;
 #[path = "gpu/image_space.rs"]
 mod image_space;
+#[path = "gpu/many_parts.rs"]
+mod many_parts;
 #[path = "gpu/pay_for_use.rs"]
 mod pay_for_use;
 #[path = "gpu/photon_map.rs"]

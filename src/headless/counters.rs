@@ -302,3 +302,50 @@ pub(super) fn decode_photons(bytes: &[u8], n: usize) -> Vec<crate::optics::Store
         })
         .collect()
 }
+
+impl ImageSpaceCounters {
+    /// What image space could not follow in this frame, as one line, or `None` when nothing was
+    /// lost: its seed follows one interface of a caster seen from the light plus the exit, so
+    /// a photon totally reflected at the exit is dropped, and one that leaves the light's or
+    /// the camera's view (or finds no surface in the camera's depth) is lost.
+    pub fn lost_summary(&self) -> Option<String> {
+        let lost = self.tir + self.misses;
+        (lost > 0 && self.photons_emitted > 0).then(|| {
+            format!(
+                "bevy_caustics: image space lost {lost} of {} photons ({:.1} %): {} totally reflected at a caster's exit (it follows one interface plus the exit), {} off screen or without a surface in the camera's depth",
+                self.photons_emitted,
+                100.0 * lost as f64 / self.photons_emitted as f64,
+                self.tir,
+                self.misses
+            )
+        })
+    }
+}
+
+impl PhotonMapCounters {
+    /// The flux the photon map's trace dropped at its bounce cap, as one line, or `None` when
+    /// none was.
+    pub fn lost_summary(&self) -> Option<String> {
+        (self.max_depth > 0).then(|| {
+            format!(
+                "bevy_caustics: photon map dropped {:.1} lm ({:.2} % of the {:.1} lm on casters) in {} paths at max_bounces",
+                self.flux_max_depth,
+                100.0 * self.flux_max_depth / self.flux_on_casters.max(1e-9),
+                self.flux_on_casters,
+                self.max_depth
+            )
+        })
+    }
+}
+
+impl AapsCounters {
+    /// The paths AAPS ended at its depth cap, as one line, or `None` when none was.
+    pub fn lost_summary(&self) -> Option<String> {
+        (self.max_depth > 0).then(|| {
+            format!(
+                "bevy_caustics: AAPS ended {} paths ({:.1} lm in flight) at its specular depth cap",
+                self.max_depth, self.flux_max_depth
+            )
+        })
+    }
+}

@@ -746,6 +746,9 @@ fn finish_report(
         && let Some(snap) = o.snapshot.take()
     {
         let c = ImageSpaceCounters::from_words(&snap.counters);
+        if let Some(line) = c.lost_summary() {
+            warn!("{line}");
+        }
         o.report.photons_traced = c.photons_emitted;
         o.report.photons_in_view = c.camera_hits;
         o.report.image_space = Some(c);
@@ -754,6 +757,9 @@ fn finish_report(
         && let Some(snap) = o.snapshot.take()
     {
         let c = PhotonMapCounters::from_snapshot(&snap);
+        if let Some(line) = c.lost_summary() {
+            warn!("{line}");
+        }
         o.report.photons_traced = c.photons_emitted;
         o.report.photons_in_view = c.photons_stored;
         o.report.photon_map_photons = decode_photons(&snap.photons, c.photons_stored as usize);
@@ -762,6 +768,9 @@ fn finish_report(
         o.report.caustics = Some(snap.image);
     } else if let Some(snap) = o.snapshot.take() {
         let c = AapsCounters::from_snapshot(&snap);
+        if let Some(line) = c.lost_summary() {
+            warn!("{line}");
+        }
         o.report.photons_traced = c.photons_emitted;
         o.report.photons_in_view = c.splats;
         o.report.aaps = Some(c);

@@ -221,3 +221,71 @@ pub fn room(s: Vec3) -> MeshGeometry {
     }
     g
 }
+
+/// A closed cylinder of `radius` and `height` standing on y = 0: smooth side normals, flat caps,
+/// `segments` around, outward faces.
+pub fn cylinder(radius: f32, height: f32, segments: u32) -> MeshGeometry {
+    let mut p = Vec::new();
+    let mut n = Vec::new();
+    let mut idx = Vec::new();
+    for s in 0..=segments {
+        let phi = TAU * s as f32 / segments as f32;
+        let d = Vec3::new(phi.cos(), 0.0, phi.sin());
+        p.extend([d * radius, d * radius + Vec3::Y * height]);
+        n.extend([d, d]);
+    }
+    for s in 0..segments {
+        let a = 2 * s;
+        // Counter-clockwise seen from outside (winding normal +d).
+        idx.push([a, a + 1, a + 2]);
+        idx.push([a + 1, a + 3, a + 2]);
+    }
+    for (y, normal) in [(0.0, Vec3::NEG_Y), (height, Vec3::Y)] {
+        let centre = p.len() as u32;
+        p.push(Vec3::Y * y);
+        n.push(normal);
+        for s in 0..=segments {
+            let phi = TAU * s as f32 / segments as f32;
+            p.push(Vec3::new(phi.cos() * radius, y, phi.sin() * radius));
+            n.push(normal);
+        }
+        for s in 0..segments {
+            let (a, b) = (centre + 1 + s, centre + 2 + s);
+            if normal.y > 0.0 {
+                idx.push([centre, b, a]);
+            } else {
+                idx.push([centre, a, b]);
+            }
+        }
+    }
+    mesh(p, n, idx)
+}
+
+/// A torus in the XZ plane centred at the origin: tube of radius `minor` around a circle of
+/// radius `major`, `segments` around the circle and `sides` around the tube, smooth outward
+/// normals.
+pub fn torus(major: f32, minor: f32, segments: u32, sides: u32) -> MeshGeometry {
+    let mut p = Vec::new();
+    let mut n = Vec::new();
+    for s in 0..=segments {
+        let phi = TAU * s as f32 / segments as f32;
+        let d = Vec3::new(phi.cos(), 0.0, phi.sin());
+        for t in 0..=sides {
+            let psi = TAU * t as f32 / sides as f32;
+            let nrm = d * psi.cos() + Vec3::Y * psi.sin();
+            p.push(d * major + nrm * minor);
+            n.push(nrm);
+        }
+    }
+    let row = sides + 1;
+    let mut idx = Vec::new();
+    for s in 0..segments {
+        for t in 0..sides {
+            let a = s * row + t;
+            let b = a + row;
+            idx.push([a, a + 1, b]);
+            idx.push([a + 1, b + 1, b]);
+        }
+    }
+    mesh(p, n, idx)
+}

@@ -6,6 +6,7 @@ pub mod closed;
 pub mod cornell;
 pub mod geometry;
 pub mod gltf;
+pub mod many;
 pub mod stiff;
 
 use std::sync::Arc;
@@ -175,6 +176,19 @@ impl SceneDesc {
             translation,
             rotation: Quat::IDENTITY,
             scale: Vec3::ONE,
+        });
+        self.nodes.len() - 1
+    }
+
+    /// Add a node that instances the mesh (and the material: glTF keeps it on the mesh) of node
+    /// `of` at `translation`; returns the new node's index.
+    pub fn instance(&mut self, name: &str, of: usize, translation: Vec3) -> usize {
+        self.nodes.push(NodeDesc {
+            name: name.into(),
+            translation,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+            ..self.nodes[of].clone()
         });
         self.nodes.len() - 1
     }
