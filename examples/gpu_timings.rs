@@ -28,7 +28,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bevy::prelude::{DirectionalLight, Transform, With, World};
+use bevy::prelude::{DirectionalLight, Or, PointLight, SpotLight, Transform, With, World};
 use bevy_caustics::headless::{
     RenderJob, RenderReport, adapter_limits, check_job, find_adapter, run,
 };
@@ -67,6 +67,17 @@ struct Args {
     /// Skip the runs of AAPS and image space at seed 003's photon counts (0.5 M, 1 M, 2 M).
     #[arg(long)]
     no_sweep: bool,
+    /// Instead, the trace-cost benchmark: every technique on generated scenes of this many
+    /// glass parts (comma separated, e.g. 1,10,30; `scenes::closed::glass_parts`), over an
+    /// open floor and in a closed room, with the specular events traced and the paths the
+    /// event budget stopped.
+    #[arg(long, value_delimiter = ',')]
+    parts: Vec<usize>,
+    /// With `--parts`: AAPS's and the photon map's `bounce_budget` values to run (specular
+    /// events per photon per frame, comma separated; the default is 8; 128 lets every path
+    /// run to `max_bounces`).
+    #[arg(long, value_delimiter = ',', default_value = "8")]
+    bounce_budget: Vec<f32>,
 }
 
 fn parse_technique(s: &str) -> Result<CausticsTechnique, String> {
@@ -111,7 +122,11 @@ fn main() {
 fn real_main(args: &Args) -> Result<(), String> {
     let adapter = find_adapter()?;
     let limits = adapter_limits()?;
-    let runs = plan(args, &repo_root(), &limits);
+    let runs = if args.parts.is_empty() {
+        plan(args, &repo_root(), &limits)
+    } else {
+        plan_parts(args, &limits)?
+    };
     validate(&runs, &limits)?;
     let count = runs.len();
     let started = Instant::now();
@@ -139,7 +154,11 @@ fn real_main(args: &Args) -> Result<(), String> {
         });
     }
     let minutes = started.elapsed().as_secs_f64() / 60.0;
-    let md = markdown(args, &adapter, &timed, minutes);
+    let md = if args.parts.is_empty() {
+        markdown(args, &adapter, &timed, minutes)
+    } else {
+        parts_markdown(args, &adapter, &timed, minutes)
+    };
     println!("{md}");
     write_out(&args.out, &md)?;
     println!("wrote {} ({minutes:.1} min)", args.out.display());
@@ -196,6 +215,149 @@ fn plan(args: &Args, root: &std::path::Path, limits: &CausticsLimits) -> Vec<Run
     }
     runs
 }
+
+/// The trace-cost benchmark's runs: every technique at its defaults on `glass_parts(n, room)`
+/// for each part count, open and closed (the scenes written to a temporary folder).
+fn plan_parts(args: &Args, limits: &CausticsLimits) -> Result<Vec<Run>, String> {
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_parts_{}", std::process::id()));
+    let mut runs = Vec::new();
+    for &n in &args.parts {
+        for closed in [false, true] {
+            let desc = bevy_caustics::scenes::closed::glass_parts(n, closed);
+            bevy_caustics::scenes::gltf::write_gltf(&desc, &dir)
+                .map_err(|e| format!("cannot write {}: {e}", desc.name))?;
+            for &technique in &args.techniques {
+                runs.extend(parts_runs(args, technique, &desc.name, &dir, limits));
+            }
+        }
+    }
+    Ok(runs)
+}
+
+/// One technique's runs on one scene of the trace-cost benchmark: one per event budget for
+/// AAPS and the photon map, one for the others (volumes with the lights nudged every frame, so
+/// every frame is a full update).
+fn parts_runs(
+    args: &Args,
+    technique: CausticsTechnique,
+    scene: &str,
+    dir: &std::path::Path,
+    limits: &CausticsLimits,
+) -> Vec<Run> {
+    let budgets = match technique {
+        CausticsTechnique::Aaps | CausticsTechnique::PhotonMap => args.bounce_budget.clone(),
+        _ => vec![8.0],
+    };
+    budgets
+        .into_iter()
+        .map(|bounce_budget| Run {
+            technique,
+            scene: scene.to_string(),
+            photons: format!("bounce_budget {bounce_budget}"),
+            job: RenderJob {
+                scene: dir.join(format!("{scene}.gltf")),
+                technique,
+                width: args.width,
+                height: args.height,
+                frames: args.warmup.saturating_add(args.frames.max(1)),
+                warmup_frames: args.warmup,
+                settle_frames: 0,
+                limits: Some(limits.clone()),
+                per_frame: (technique == CausticsTechnique::Volume).then_some(nudge_lights as _),
+                aaps: bevy_caustics::AapsSettings {
+                    bounce_budget,
+                    ..Default::default()
+                },
+                photon_map: bevy_caustics::PhotonMapSettings {
+                    bounce_budget,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            seed: "",
+        })
+        .collect()
+}
+
+/// Moves every point and spot light by 0.1 mm back and forth: volumes re-propagate fully.
+fn nudge_lights(world: &mut World, frame: u32) {
+    let mut q = world.query_filtered::<&mut Transform, Or<(With<PointLight>, With<SpotLight>)>>();
+    for mut t in q.iter_mut(world) {
+        t.translation.x += if frame.is_multiple_of(2) { 1e-4 } else { -1e-4 };
+    }
+}
+
+/// The trace-cost benchmark's document: per technique and scene, the technique's median GPU ms,
+/// its trace pass's, and what the trace did (events, paths the budget stopped).
+fn parts_markdown(args: &Args, adapter: &str, timed: &[Timed], minutes: f64) -> String {
+    let mut md = String::from("# bevy_caustics: trace cost against the number of glass parts
+
+");
+    md.push_str(&header(args, adapter, timed, minutes));
+    md.push_str(
+        "| technique | scene | bounce budget | total ms (median) | trace ms (median) | photons traced | specular events | per photon | stopped by the budget | at the bounce cap | wall s |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+    );
+    for t in timed {
+        let row = match &t.result {
+            Ok(rep) => parts_row(rep),
+            Err(e) => format!("failed: {} | | | | | | |", e.replace('|', "/")),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {row} | {:.1} |",
+            t.run.technique.name(),
+            t.run.scene,
+            t.run.photons,
+            t.seconds
+        );
+    }
+    md.push_str(PARTS_NOTES);
+    md
+}
+
+/// The measured cells of one run of the trace-cost benchmark.
+fn parts_row(rep: &RenderReport) -> String {
+    let trace: Vec<f64> = rep
+        .pass_ms
+        .iter()
+        .filter(|(name, _)| name.ends_with("/trace") || name.ends_with("volume/project"))
+        .map(|(_, ms)| *ms)
+        .collect();
+    let trace = if trace.is_empty() {
+        "-".to_string()
+    } else {
+        format!("{:.3}", trace.iter().sum::<f64>())
+    };
+    let (events, stopped, cap) = if let Some(a) = &rep.aaps {
+        (a.events.to_string(), a.budget_stopped.to_string(), a.max_depth.to_string())
+    } else if let Some(p) = &rep.photon_map {
+        (p.events.to_string(), p.budget_stopped.to_string(), p.max_depth.to_string())
+    } else {
+        ("-".into(), "-".into(), "-".into())
+    };
+    let per_photon = events
+        .parse::<f64>()
+        .map_or("-".into(), |e| format!("{:.2}", e / rep.photons_traced.max(1) as f64));
+    format!(
+        "{} | {trace} | {} | {events} | {per_photon} | {stopped} | {cap}",
+        median(&rep.frame_ms).map_or("-".into(), |ms| format!("{ms:.3}")),
+        rep.photons_traced
+    )
+}
+
+const PARTS_NOTES: &str = "
+The scenes are `scenes::closed::glass_parts(n, closed)`: `n` parts cycling through a \
+brilliant-cut gem (IOR 2.4), a thick glass ball (IOR 1.5) and a thin-walled shell, lit by one \
+bulb; `_open` over a floor, `_room` inside a closed room of receivers. Every technique at its \
+defaults (2^18 photons per light). AAPS and the photon map trace at most \
+`photons · bounce_budget` specular events per frame (default 8 per photon), whatever the \
+scene: `per photon` is what the scene asked for, `stopped by the budget` the paths it cut \
+(their flux counted). Image space follows one interface and the exit per photon and volumes \
+propagate each photon once per slab, so their trace cost does not depend on the chains of \
+internal reflections at all. `trace ms` is the trace pass (AAPS, photon map, image space) or \
+the volumes' projection pass.
+";
 
 /// Refuse, before minutes of rendering, what a run would fail on: a missing scene, a size or
 /// photon count above this adapter's maxima.

@@ -323,28 +323,34 @@ impl ImageSpaceCounters {
 }
 
 impl PhotonMapCounters {
-    /// The flux the photon map's trace dropped at its bounce cap, as one line, or `None` when
-    /// none was.
+    /// The flux the photon map's trace dropped at its bounce cap or its event budget, as one
+    /// line, or `None` when none was.
     pub fn lost_summary(&self) -> Option<String> {
-        (self.max_depth > 0).then(|| {
+        (self.max_depth + self.budget_stopped > 0).then(|| {
             format!(
-                "bevy_caustics: photon map dropped {:.1} lm ({:.2} % of the {:.1} lm on casters) in {} paths at max_bounces",
+                "bevy_caustics: photon map dropped {:.1} lm ({:.2} % of the {:.1} lm on casters) in {} paths at max_bounces and {} paths stopped by its event budget (bounce_budget)",
                 self.flux_max_depth,
                 100.0 * self.flux_max_depth / self.flux_on_casters.max(1e-9),
                 self.flux_on_casters,
-                self.max_depth
+                self.max_depth,
+                self.budget_stopped
             )
         })
     }
 }
 
 impl AapsCounters {
-    /// The paths AAPS ended at its depth cap, as one line, or `None` when none was.
+    /// The paths AAPS ended at its depth cap or its event budget, as one line, or `None` when
+    /// none was.
     pub fn lost_summary(&self) -> Option<String> {
-        (self.max_depth > 0).then(|| {
+        (self.max_depth + self.budget_stopped > 0).then(|| {
             format!(
-                "bevy_caustics: AAPS ended {} paths ({:.1} lm in flight) at its specular depth cap",
-                self.max_depth, self.flux_max_depth
+                "bevy_caustics: AAPS ended {} paths at its specular depth cap and {} paths at its event budget (bounce_budget), {:.1} lm in flight ({:.2} % of the {:.1} lm on casters)",
+                self.max_depth,
+                self.budget_stopped,
+                self.flux_max_depth,
+                100.0 * self.flux_max_depth / self.flux_on_casters.max(1e-9),
+                self.flux_on_casters
             )
         })
     }

@@ -222,3 +222,53 @@ pub fn thin_shell() -> SceneDesc {
     s.materials[1].params = glass(THIN_IOR, 0.0);
     s
 }
+
+/// Part counts of the trace-cost benchmark (`examples/gpu_timings.rs --parts`).
+pub const PARTS: [usize; 3] = [1, 10, 30];
+
+/// `n` glass parts (1 to 30) on a 6 x 5 grid 1.2 m up, lit by a bulb under the ceiling: the
+/// scene of the trace-cost benchmark (issue 32 item 1: the cost follows the budget, not the
+/// asset's chains of internal reflections). The parts cycle through a brilliant-cut gem
+/// (IOR 2.4, dozens of internal reflections), a thick glass ball (IOR 1.5) and a thin-walled
+/// shell (glTF thickness 0). `closed`: inside the closed room of receivers, where no light
+/// leaves (every path ends on a wall, the cap or the budget); otherwise over an open floor.
+pub fn glass_parts(n: usize, closed: bool) -> SceneDesc {
+    let name = format!("glass_parts_{n}_{}", if closed { "room" } else { "open" });
+    let eye = Vec3::new(2.4, 2.7, 2.4) * if closed { 0.7 } else { 1.0 };
+    let cam = CameraDesc {
+        translation: eye,
+        rotation: look_at(eye, Vec3::new(0.0, 0.6, 0.0)),
+        fov_y: 70f32.to_radians(),
+    };
+    let mut s = SceneDesc::new(&name, cam);
+    let walls = s.material("walls", diffuse(0.8), false);
+    if closed {
+        s.add("room", geometry::room(ROOM), walls, Vec3::ZERO);
+    } else {
+        s.add("floor", geometry::quad(20.0, 20.0), walls, Vec3::ZERO);
+    }
+    let gem = s.material("gem", glass(2.4, 1.0), false);
+    let ball = s.material("glass", glass(1.5, 1.0), false);
+    let shell = s.material("thin_glass", glass(THIN_IOR, 0.0), false);
+    for i in 0..n.clamp(1, 30) {
+        let at = Vec3::new(
+            (i % 6) as f32 * 0.6 - 1.5,
+            CASTER_AT.y,
+            (i / 6) as f32 * 0.6 - 1.2,
+        );
+        let (mesh, material) = match i % 3 {
+            0 => (geometry::brilliant(0.2), gem),
+            1 => (geometry::uv_sphere(0.2, 24, 12), ball),
+            _ => (geometry::uv_sphere(0.2, 24, 12), shell),
+        };
+        s.add(&format!("part_{i}"), mesh, material, at);
+    }
+    s.lights.push(LightDesc {
+        name: "bulb".into(),
+        kind: LightKind::Point { candela: 20_000.0 },
+        color: Vec3::ONE,
+        translation: Vec3::new(0.1, ROOM.y - 0.3, 0.2),
+        rotation: glam::Quat::IDENTITY,
+    });
+    s
+}
