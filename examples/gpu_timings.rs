@@ -290,9 +290,11 @@ fn nudge_lights(world: &mut World, frame: u32) {
 /// The trace-cost benchmark's document: per technique and scene, the technique's median GPU ms,
 /// its trace pass's, and what the trace did (events, paths the budget stopped).
 fn parts_markdown(args: &Args, adapter: &str, timed: &[Timed], minutes: f64) -> String {
-    let mut md = String::from("# bevy_caustics: trace cost against the number of glass parts
+    let mut md = String::from(
+        "# bevy_caustics: trace cost against the number of glass parts
 
-");
+",
+    );
     md.push_str(&header(args, adapter, timed, minutes));
     md.push_str(
         "| technique | scene | bounce budget | total ms (median) | trace ms (median) | photons traced | specular events | per photon | stopped by the budget | at the bounce cap | wall s |\n\
@@ -330,15 +332,23 @@ fn parts_row(rep: &RenderReport) -> String {
         format!("{:.3}", trace.iter().sum::<f64>())
     };
     let (events, stopped, cap) = if let Some(a) = &rep.aaps {
-        (a.events.to_string(), a.budget_stopped.to_string(), a.max_depth.to_string())
+        (
+            a.events.to_string(),
+            a.budget_stopped.to_string(),
+            a.max_depth.to_string(),
+        )
     } else if let Some(p) = &rep.photon_map {
-        (p.events.to_string(), p.budget_stopped.to_string(), p.max_depth.to_string())
+        (
+            p.events.to_string(),
+            p.budget_stopped.to_string(),
+            p.max_depth.to_string(),
+        )
     } else {
         ("-".into(), "-".into(), "-".into())
     };
-    let per_photon = events
-        .parse::<f64>()
-        .map_or("-".into(), |e| format!("{:.2}", e / rep.photons_traced.max(1) as f64));
+    let per_photon = events.parse::<f64>().map_or("-".into(), |e| {
+        format!("{:.2}", e / rep.photons_traced.max(1) as f64)
+    });
     format!(
         "{} | {trace} | {} | {events} | {per_photon} | {stopped} | {cap}",
         median(&rep.frame_ms).map_or("-".into(), |ms| format!("{ms:.3}")),

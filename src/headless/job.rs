@@ -396,7 +396,10 @@ fn drive(
         Res<crate::render::memory::CausticsGpuMemory>,
     ),
     readback: Res<crate::render::readback::CausticsReadback>,
-    warnings: Res<crate::CausticsWarnings>,
+    (warnings, losses): (
+        Res<crate::CausticsWarnings>,
+        Option<Res<crate::render::losses::CausticsLossCounters>>,
+    ),
     frames: Res<FrameCount>,
     fitted: Res<super::volume::VolumesFitted>,
     mut exit: MessageWriter<AppExit>,
@@ -550,6 +553,7 @@ fn drive(
             let mut o = shared.0.lock().expect("state");
             let reference = main.single().ok().and_then(|(_, image, _)| image);
             finish_report(&job.0, &mut o, &warnings, reference);
+            o.report.loss_warnings = losses.map_or(Vec::new(), |l| l.messages.clone());
             o.finished = true;
             exit.write(AppExit::Success);
         }

@@ -40,6 +40,9 @@ pub struct RenderReport {
     pub passes: Vec<String>,
     /// Invalid-input warnings logged.
     pub warnings: Vec<String>,
+    /// Lost-light warnings logged (`render::losses`: paths at a bounce cap or an event budget,
+    /// photons a technique cannot follow), at most one per counter.
+    pub loss_warnings: Vec<String>,
     /// Metrics against `--compare`, filled by the caller.
     pub metrics: Option<ImageMetrics>,
     /// Caustic irradiance (lux), zero where no caustic lands.

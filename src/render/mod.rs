@@ -10,6 +10,7 @@ pub mod composite;
 pub mod fixed_splat;
 pub mod image;
 pub mod image_space;
+pub mod losses;
 pub mod memory;
 pub mod photon_map;
 pub mod readback;

@@ -392,7 +392,13 @@ fn event_budget_bounds_the_trace_and_keeps_the_flux() {
         assert!(stopped > 0, "{name}: the budget stopped nothing");
         assert!(err.abs() < 0.03, "{name}: {:+.2} %", err * 100.0);
     }
-    for report in [&aaps, &pm] {
+    // Named once at run time (render::losses), with the setting to change.
+    for (report, setting) in [
+        (&aaps, "AapsSettings::bounce_budget"),
+        (&pm, "PhotonMapSettings::bounce_budget"),
+    ] {
         assert!(report.caustics.as_ref().unwrap().all_finite());
+        let named = report.loss_warnings.iter().filter(|w| w.contains(setting));
+        assert_eq!(named.count(), 1, "{setting}: {:#?}", report.loss_warnings);
     }
 }

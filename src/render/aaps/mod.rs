@@ -57,6 +57,19 @@ pub fn missing_aaps_capabilities(storage_buffers: u32) -> Vec<String> {
 /// Render-app part; called from [`crate::render::build`] after the capability gate.
 /// Returns whether AAPS is on.
 pub(crate) fn build(app: &mut App) -> bool {
+    super::losses::register(
+        app,
+        &[
+            super::losses::LossCounter {
+                path: "render/caustics/aaps/budget_stopped",
+                what: "AAPS paths stopped in a frame by the per-frame event budget (AapsSettings::bounce_budget): their light is missing from the caustic; raise the budget or lower the photon count",
+            },
+            super::losses::LossCounter {
+                path: "render/caustics/aaps/max_depth",
+                what: "AAPS paths ended in a frame at AapsSettings::max_bounces specular events (their flux is counted as lost)",
+            },
+        ],
+    );
     let fixed = app
         .get_sub_app(RenderApp)
         .and_then(|r| r.world().get_resource::<super::fixed_splat::FixedSplats>())

@@ -42,7 +42,7 @@ pub const ALL_PASSES: [&str; 5] = [
 
 /// Names of the counters read into diagnostics (`render/caustics/aaps/<name>`), with their word
 /// in the `accum` buffer (`C_*` in common.wgsl).
-pub const COUNTERS: [(&str, u64); 13] = [
+pub const COUNTERS: [(&str, u64); 14] = [
     ("caustics/aaps/tasks", 0),
     ("caustics/aaps/photons_emitted", 1),
     ("caustics/aaps/splats_plain", 3),
@@ -54,6 +54,7 @@ pub const COUNTERS: [(&str, u64); 13] = [
     ("caustics/aaps/clamped", 9),
     ("caustics/aaps/nan_guards", 10),
     ("caustics/aaps/photon_overflow", 14),
+    ("caustics/aaps/max_depth", 11),
     ("caustics/aaps/events", 29),
     ("caustics/aaps/budget_stopped", 30),
 ];

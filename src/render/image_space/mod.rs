@@ -79,6 +79,13 @@ use bevy::shader::Shader;
 /// Render-app part; called from [`crate::render::build`] when AAPS (whose scene extraction it
 /// shares) is available.
 pub(crate) fn build(app: &mut App) {
+    super::losses::register(
+        app,
+        &[super::losses::LossCounter {
+            path: "render/caustics/image_space/tir",
+            what: "image-space photons in a frame were totally reflected inside a caster and dropped: image space follows one interface and the exit; Aaps or PhotonMap follow light that reflects inside glass",
+        }],
+    );
     let shaders = {
         let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
         pipelines::ImageSpaceShaders {

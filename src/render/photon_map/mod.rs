@@ -102,6 +102,19 @@ use bevy::shader::Shader;
 
 /// Render-app part; called from [`crate::render::build`] when the shared tracer is available.
 pub(crate) fn build(app: &mut App) {
+    super::losses::register(
+        app,
+        &[
+            super::losses::LossCounter {
+                path: "render/caustics/photon_map/budget_stopped",
+                what: "photon-map paths stopped in a frame by the per-frame event budget (PhotonMapSettings::bounce_budget): their light is missing from the caustic; raise the budget or lower the photon count",
+            },
+            super::losses::LossCounter {
+                path: "render/caustics/photon_map/max_depth",
+                what: "photon-map paths ended in a frame at PhotonMapSettings::max_bounces specular events (their flux is counted as lost)",
+            },
+        ],
+    );
     let shaders = {
         let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
         pipelines::PhotonMapShaders {
