@@ -855,3 +855,26 @@ mod thin;
 mod volume;
 #[path = "cpu/volume_modes.rs"]
 mod volume_modes;
+
+/// `scenes::look_at` looks where it is told from any side, straight down and straight up
+/// included (where +Y is no up and `look_at_rh` alone returns NaN; a test scene's top-down
+/// camera rendered nothing with volumes).
+#[test]
+fn look_at_is_finite_and_looks_at_the_target() {
+    let target = Vec3::new(0.5, 0.0, -0.25);
+    for eye in [
+        Vec3::new(0.5, 3.0, -0.25),
+        Vec3::new(0.5, -3.0, -0.25),
+        Vec3::new(2.0, 3.0, 1.0),
+        Vec3::new(0.5, 3.0, -0.2499),
+    ] {
+        let q = scenes::look_at(eye, target);
+        assert!(q.is_finite() && q.is_normalized(), "{eye}: {q}");
+        let forward = q * Vec3::NEG_Z;
+        let want = (target - eye).normalize();
+        assert!(
+            forward.dot(want) > 0.9999,
+            "{eye}: looks along {forward}, not {want}"
+        );
+    }
+}

@@ -126,10 +126,16 @@ pub struct VolumeNode {
     pub extras: serde_json::Value,
 }
 
-/// A camera at `eye` looking at `target` with +Y up.
+/// A camera at `eye` looking at `target` with +Y up (-Z up when it looks straight down or up,
+/// where +Y is no up: `look_at_rh` would return NaN there).
 pub fn look_at(eye: Vec3, target: Vec3) -> Quat {
-    let m = glam::Mat4::look_at_rh(eye, target, Vec3::Y).inverse();
-    Quat::from_mat4(&m)
+    let dir = (target - eye).normalize_or(Vec3::NEG_Z);
+    let m = if dir.cross(Vec3::Y).length_squared() < 1e-8 {
+        glam::Mat4::look_at_rh(eye, eye + dir, Vec3::NEG_Z)
+    } else {
+        glam::Mat4::look_at_rh(eye, target, Vec3::Y)
+    };
+    Quat::from_mat4(&m.inverse())
 }
 
 /// The rotation that makes local -Z travel along `dir`.
