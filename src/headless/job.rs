@@ -185,6 +185,11 @@ struct MainCamera;
 #[derive(Component)]
 struct TwinCamera;
 
+/// Every camera the job spawned (main, right eye, twin): switched off once the readbacks of
+/// the last measured frame are taken, so the frames spent waiting for them render nothing.
+#[derive(Component)]
+struct JobCamera;
+
 /// Render `job`. Errors are one line, meant for the user; the sizes are checked first
 /// ([`check_job`] against `job.limits`).
 pub fn run(job: RenderJob) -> Result<RenderReport, String> {
@@ -544,9 +549,24 @@ fn drive(
                     o.snapshot = Some(snap);
                 }
             }
-            let waiting = job.0.technique != CausticsTechnique::Reference
-                && (readback.pending() > 0 || shared.0.lock().is_ok_and(|o| o.snapshot.is_none()));
-            if n < 4 || (waiting && n < 600) {
+            let gpu = job.0.technique != CausticsTechnique::Reference;
+            let (caustics_in, frames_in) = shared.0.lock().map_or((false, false), |o| {
+                let caustics = o.snapshot.is_some() && readback.pending() == 0;
+                let twin = handles.twin.is_none() || !o.twin_raw.is_empty();
+                (caustics, !o.report.frame_rgba8.is_empty() && twin)
+            });
+            // The last measured frame's readbacks are all taken: the cameras have nothing
+            // left to render for this job.
+            if gpu && caustics_in {
+                commands.queue(|world: &mut World| {
+                    let mut q = world.query_filtered::<&mut Camera, With<JobCamera>>();
+                    for mut cam in q.iter_mut(world) {
+                        cam.is_active = false;
+                    }
+                });
+            }
+            let waiting = !frames_in || (gpu && !caustics_in);
+            if waiting && n < 600 {
                 *phase = Phase::Finishing(n + 1);
                 return;
             }
@@ -639,6 +659,7 @@ fn spawn_cameras(
         job.image_space.clone(),
         job.photon_map.clone(),
         MainCamera,
+        JobCamera,
         Camera3d::default(),
         Camera {
             order: 1,
@@ -666,6 +687,7 @@ fn spawn_cameras(
             job.aaps.clone(),
             job.image_space.clone(),
             job.photon_map.clone(),
+            JobCamera,
             Camera3d::default(),
             Camera {
                 order: 3,
@@ -689,6 +711,7 @@ fn spawn_cameras(
     if let Some(twin) = &handles.twin {
         commands.spawn((
             TwinCamera,
+            JobCamera,
             Camera3d::default(),
             Camera {
                 order: 2,
