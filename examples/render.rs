@@ -6,13 +6,15 @@
 //!     --height 256 --out-exr caustics.exr --out-png frame.png --json stats.json \
 //!     [--photons N] [--frames N] [--seed N] [--ev100 EV] [--compare REF.exr] [--aaps field=value,...]
 //!     [--volume field=value,...] [--image-space field=value,...] [--photon-map field=value,...]
-//!     [--stereo METRES] [--webgpu-limits] [--without FEATURE,...] [--settle-frames N]
+//!     [--stereo METRES] [--webgpu-limits] [--without FEATURE,...] [--settle-frames N] [--stage]
 //! ```
 //!
 //! `--help` lists every option with its unit and default. `--webgpu-limits` starts the device
 //! with WebGPU's default limits; `--without` leaves adapter features off it
 //! (`float32_blendable`, `texture_adapter_specific_format_features`), to try the fallbacks a
-//! browser may need. `--settle-frames` sets `Caustics::settle_frames` (default 16; 0: every
+//! browser may need. `--stage` puts a model that has no light, camera or floor (most sample
+//! models) on a stage sized from its bounds: a sun, a floor and a camera framing it
+//! (`bevy_caustics::headless::StageLayout`). `--settle-frames` sets `Caustics::settle_frames` (default 16; 0: every
 //! frame runs the technique). An option given twice takes its last value; `--aaps`,
 //! `--volume`, `--image-space`, `--photon-map` and `--without` add up.
 //!
@@ -37,7 +39,7 @@ const TECHNIQUES: &str = "reference, aaps, volume, image_space, photon_map";
 /// Render a glTF headless with a caustics technique: the caustic irradiance (EXR, lux), the
 /// tone-mapped frame (PNG) and statistics (JSON).
 ///
-/// Errors (missing, unreadable or malformed file, no camera, no lights, no adapter, bad
+/// Errors (missing, unreadable or malformed file, no camera or no lights without --stage, no adapter, bad
 /// option, a size above what this adapter allows) print one line and exit with status 2; no
 /// output file is written unless the whole render succeeded.
 #[derive(Parser, Debug)]
@@ -116,6 +118,12 @@ struct Cli {
     /// [default: PhotonMapSettings::default()].
     #[arg(long = "photon-map", value_name = "FIELD=VALUE,...")]
     photon_map: Vec<String>,
+    /// Put the model on a stage: once it has spawned, add a sun (10 000 lux, shadows), a
+    /// floor just below its bounds and a camera framing it, all sized from its bounds; the
+    /// glTF's cameras are left off, its lights stay. For models that come without a light, a
+    /// camera or a floor (most sample models). Exposure EV100 13 unless --ev100 is given.
+    #[arg(long)]
+    stage: bool,
     /// Start the device with WebGPU's default limits instead of the adapter's.
     #[arg(long)]
     webgpu_limits: bool,
@@ -204,6 +212,7 @@ impl Cli {
             ev100: self.ev100,
             stereo: self.stereo,
             webgpu_limits: self.webgpu_limits,
+            stage: self.stage,
             progress: true,
             ..Default::default()
         };

@@ -5,6 +5,8 @@
 #                                        (twice the default settle_frames, as the goldens)
 #   docs/images/technique-<name>.png     the headless renderer on one scene, once per technique
 #                                        (aaps, image_space, photon_map, volume, reference)
+#   docs/images/asset-<Model>.png        each public sample model (tests/gpu/assets.rs) on the
+#                                        headless renderer's stage (--stage), default technique
 #
 # Builds the two examples once, then runs them with no display (the examples render offscreen
 # when DISPLAY and WAYLAND_DISPLAY are unset). Needs a Vulkan driver (lavapipe will do: 8 minutes
@@ -13,6 +15,9 @@
 #   SHOWCASE=1 (0: leave the showcase picture as it is)  SHOWCASE_SIZE=1280x720  SHOWCASE_FRAMES=32
 #   SCENE=assets/scenes/glass_sphere.gltf  TECH_WIDTH=320  TECH_HEIGHT=240  TECH_FRAMES=24
 #   TECH_EV100=13  REFERENCE_PHOTONS=4194304  TECHNIQUES="aaps image_space photon_map volume reference"
+#   ASSETS=1 (0: leave the sample-model pictures)  ASSET_DIR=shared/khronos (else ../shared/khronos)
+#   ASSET_PHOTONS=1048576  ASSET_MODELS="AttenuationTest TransmissionRoughnessTest SunglassesKhronos
+#   DispersionTest GlassTable"
 #
 # A picture over MAX_BYTES (500 KB) is re-encoded to 256 colours (pngquant or Pillow).
 set -euo pipefail
@@ -32,6 +37,14 @@ TECH_EV100=${TECH_EV100:-13}
 REFERENCE_PHOTONS=${REFERENCE_PHOTONS:-4194304}
 TECHNIQUES=${TECHNIQUES:-aaps image_space photon_map volume reference}
 MAX_BYTES=${MAX_BYTES:-512000}
+ASSETS=${ASSETS:-1}
+if [[ -z ${ASSET_DIR:-} ]]; then
+  ASSET_DIR=shared/khronos
+  [[ -d $ASSET_DIR ]] || ASSET_DIR=../shared/khronos
+fi
+# 2^20 photons per light: the stage's sun spreads them over a floor four model radii wide.
+ASSET_PHOTONS=${ASSET_PHOTONS:-1048576}
+ASSET_MODELS=${ASSET_MODELS:-AttenuationTest TransmissionRoughnessTest SunglassesKhronos DispersionTest GlassTable}
 OUT=docs/images
 
 mkdir -p "$OUT"
@@ -94,5 +107,18 @@ for tech in $TECHNIQUES; do
   fit "$OUT/technique-$tech.png"
   echo "   $tech in $(elapsed "$t")"
 done
+
+if [[ $ASSETS == 1 ]]; then
+  for model in $ASSET_MODELS; do
+    t=$(date +%s)
+    echo "== $model on the stage, aaps, ${TECH_WIDTH}x${TECH_HEIGHT}, $TECH_FRAMES frames"
+    cargo run --release --example render -- "$ASSET_DIR/$model/$model.glb" --stage \
+      --technique aaps --width "$TECH_WIDTH" --height "$TECH_HEIGHT" --frames "$TECH_FRAMES" \
+      --photons "$ASSET_PHOTONS" --out-png "$work/asset-$model.png" --json "$work/asset-$model.json"
+    cp "$work/asset-$model.png" "$OUT/asset-$model.png"
+    fit "$OUT/asset-$model.png"
+    echo "   $model in $(elapsed "$t")"
+  done
+fi
 
 echo "== done in $(elapsed "$start"): $(ls "$OUT")"

@@ -11,6 +11,8 @@ static GPU: Mutex<()> = Mutex::new(());
 
 #[path = "gpu/aaps.rs"]
 mod aaps;
+#[path = "gpu/assets.rs"]
+mod assets;
 #[path = "gpu/change.rs"]
 mod change;
 #[path = "gpu/energy.rs"]

@@ -103,6 +103,11 @@ pub struct RenderJob {
     /// Adapter features to leave off the device (tests force the techniques' fallbacks with
     /// `FLOAT32_BLENDABLE` and `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`). Default empty.
     pub disabled_features: bevy::render::settings::WgpuFeatures,
+    /// Put the model on a stage ([`super::stage`]): once it has spawned, add a sun, a floor
+    /// below its bounds and a camera framing it (the glTF's own cameras are left off; its
+    /// lights stay). For the many models that come with no light, camera or floor. The
+    /// exposure is [`super::stage::STAGE_EV100`] unless `ev100` is set. Default false.
+    pub stage: bool,
 }
 
 impl Default for RenderJob {
@@ -135,6 +140,7 @@ impl Default for RenderJob {
             settle_frames: 16,
             webgpu_limits: false,
             disabled_features: bevy::render::settings::WgpuFeatures::empty(),
+            stage: false,
         }
     }
 }
@@ -271,7 +277,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
             job.volume.clone(),
         ))
         .init_resource::<super::volume::VolumesFitted>()
-        .add_systems(Update, (drive, super::volume::fit_volumes).chain());
+        .add_systems(Update, (stage, drive, super::volume::fit_volumes).chain());
     if job.mark_lights {
         app.add_systems(Update, crate::mark_every_light);
     }
@@ -406,7 +412,10 @@ fn drive(
         Option<Res<crate::render::losses::CausticsLossCounters>>,
     ),
     frames: Res<FrameCount>,
-    fitted: Res<super::volume::VolumesFitted>,
+    (fitted, layout): (
+        Res<super::volume::VolumesFitted>,
+        Option<Res<super::stage::StageLayout>>,
+    ),
     mut exit: MessageWriter<AppExit>,
 ) {
     let fail = |msg: String, exit: &mut MessageWriter<AppExit>| {
@@ -430,7 +439,19 @@ fn drive(
                 *phase = Phase::Spawned(n + 1);
                 return;
             }
-            match spawn_cameras(&mut commands, &job.0, &handles, &mut cameras, &lights) {
+            if job.0.stage && layout.is_none() {
+                // The stage is being built (or failed: `stage` has told the error).
+                return;
+            }
+            let layout = layout.as_deref();
+            match spawn_cameras(
+                &mut commands,
+                &job.0,
+                &handles,
+                &mut cameras,
+                &lights,
+                layout,
+            ) {
                 Ok(()) => *phase = Phase::Tracing,
                 Err(e) => fail(e, &mut exit),
             }
@@ -618,18 +639,33 @@ fn spawn_cameras(
         (Without<MainCamera>, Without<TwinCamera>),
     >,
     lights: &Query<(), Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>>,
+    stage: Option<&super::stage::StageLayout>,
 ) -> Result<(), String> {
-    let Some((mut cam, gt, projection)) = cameras.iter_mut().next() else {
-        return Err(format!("{} has no camera", job.scene.display()));
+    let (mut projection, gt) = if let Some(stage) = stage {
+        // The glTF's own cameras stay off: the stage's frames the model.
+        for (mut cam, _, _) in cameras.iter_mut() {
+            cam.is_active = false;
+        }
+        (
+            Projection::Perspective(stage.projection.clone()),
+            GlobalTransform::from(stage.camera),
+        )
+    } else {
+        let Some((mut cam, gt, projection)) = cameras.iter_mut().next() else {
+            return Err(format!(
+                "{} has no camera (--stage adds one)",
+                job.scene.display()
+            ));
+        };
+        cam.is_active = false;
+        (projection.clone(), *gt)
     };
     if lights.is_empty() {
         return Err(format!(
-            "{} has no lights (KHR_lights_punctual)",
+            "{} has no lights (KHR_lights_punctual; --stage adds a sun)",
             job.scene.display()
         ));
     }
-    cam.is_active = false;
-    let mut projection = projection.clone();
     if let Projection::Perspective(p) = &mut projection {
         p.aspect_ratio = job.width as f32 / job.height as f32;
     }
@@ -810,6 +846,7 @@ fn finish_report(
         o.report.photons_traced = img.stats.photons_emitted;
         o.report.photons_in_view = img.stats.photons_in_view;
         o.report.reference_seconds = img.seconds;
+        o.report.reference_stats = Some(img.stats.clone());
     } else {
         o.report.caustics = Some(CausticImage::new(w, h));
     }
@@ -838,10 +875,44 @@ fn finish_report(
     }
 }
 
-/// The job's camera exposure: its EV100, else Bevy's default.
+/// The job's camera exposure: its EV100, else the stage's sunlit one on a stage, else Bevy's
+/// default.
 fn job_exposure(job: &RenderJob) -> bevy::camera::Exposure {
+    let stage = job.stage.then_some(super::stage::STAGE_EV100);
     job.ev100
+        .or(stage)
         .map_or_else(bevy::camera::Exposure::default, |ev100| {
             bevy::camera::Exposure { ev100 }
         })
+}
+
+/// Stage `Spawned(2)` of a job with `stage`: measure the model and build the stage (once);
+/// a model with no mesh fails the job.
+fn stage(
+    mut commands: Commands,
+    job: Res<Job>,
+    phase: Res<Phase>,
+    shared: Res<Shared>,
+    built: Option<Res<super::stage::StageLayout>>,
+    meshes: Query<(&Mesh3d, &GlobalTransform), Without<super::stage::StagePart>>,
+    (mut mesh_assets, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
+    mut exit: MessageWriter<AppExit>,
+) {
+    if !job.0.stage || built.is_some() || *phase != Phase::Spawned(2) {
+        return;
+    }
+    let aspect = job.0.width as f32 / job.0.height.max(1) as f32;
+    if let Err(e) = super::stage::build_stage(
+        &mut commands,
+        &meshes,
+        &mut mesh_assets,
+        &mut materials,
+        aspect,
+    ) {
+        if let Ok(mut o) = shared.0.lock() {
+            o.error
+                .get_or_insert(format!("{}: {e}", job.0.scene.display()));
+        }
+        exit.write(AppExit::error());
+    }
 }

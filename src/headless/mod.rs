@@ -10,6 +10,7 @@ mod counters;
 mod job;
 mod load_error;
 mod report;
+mod stage;
 mod volume;
 
 pub use crate::volume::volume_from_extras;
@@ -22,4 +23,8 @@ pub use load_error::{
     tool_log_plugin,
 };
 pub use report::RenderReport;
+pub use stage::{
+    STAGE_EV100, STAGE_FLOOR_ALBEDO, STAGE_FOV_Y, STAGE_SUN_LUX, StageLayout, StagePart,
+    stage_sun_direction, world_bounds,
+};
 pub use volume::VolumeCounters;

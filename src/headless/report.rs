@@ -36,6 +36,10 @@ pub struct RenderReport {
     pub photons_in_view: u64,
     /// Wall-clock seconds of the reference trace.
     pub reference_seconds: f64,
+    /// The reference trace's counters (technique `reference` only): its flux on the casters,
+    /// deposited, escaped, absorbed, at the cap and taken by roulette, which balance.
+    #[serde(skip)]
+    pub reference_stats: Option<crate::reference::TraceStats>,
     /// Distinct caustics passes dispatched while measuring, in order of first dispatch.
     pub passes: Vec<String>,
     /// Invalid-input warnings logged.

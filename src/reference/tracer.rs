@@ -105,6 +105,14 @@ pub struct TraceStats {
     pub flux_escaped: DVec3,
     /// Flux still in flight when a path reached `max_specular_events` (not deposited).
     pub flux_max_depth: DVec3,
+    /// Flux taken inside absorbing media (Beer-Lambert), by a conductor's reflectance and by a
+    /// dielectric's transmission tint, per channel.
+    pub flux_absorbed: DVec3,
+    /// Flux Russian roulette took from the paths it ended less what it added to the survivors
+    /// (zero in expectation; either sign in a run), per channel. With it the balance
+    /// `flux_on_casters = flux_deposited + flux_escaped + flux_max_depth + flux_absorbed +
+    /// flux_roulette` holds to rounding (paths a guard ended aside: `nan_guards`).
+    pub flux_roulette: DVec3,
     /// Flux deposited per receiver instance (index into the TLAS).
     pub flux_per_instance: BTreeMap<u32, DVec3>,
     /// Flux deposited per path kind `(reflections, refractions)`.
@@ -133,6 +141,8 @@ impl TraceStats {
         self.flux_on_casters += o.flux_on_casters;
         self.flux_escaped += o.flux_escaped;
         self.flux_max_depth += o.flux_max_depth;
+        self.flux_absorbed += o.flux_absorbed;
+        self.flux_roulette += o.flux_roulette;
         for (k, v) in o.flux_per_instance {
             *self.flux_per_instance.entry(k).or_default() += v;
         }
@@ -461,6 +471,7 @@ fn trace_photon(
     let mut medium: Option<u32> = None;
     let flux0 = flux.max_element();
     loop {
+        let specular = reflections + refractions;
         let Some(hit) = tlas.closest_hit(o, d, 0.0, f32::INFINITY, |_| false) else {
             stats.photons_escaped += 1;
             if reflections + refractions > 0 {
@@ -475,7 +486,11 @@ fn trace_photon(
                 ..
             } = tlas.instances[m as usize].surface
         {
-            flux *= optics::beer_lambert(attenuation_color, attenuation_distance, hit.t);
+            let kept = flux * optics::beer_lambert(attenuation_color, attenuation_distance, hit.t);
+            if specular > 0 {
+                stats.flux_absorbed += optics::finite_or_zero(flux - kept).as_dvec3();
+            }
+            flux = kept;
         }
         let p = o + d * hit.t;
         let (ng, ns) = tlas.hit_normals(&hit);
@@ -486,7 +501,6 @@ fn trace_photon(
         // Normals facing the side the photon arrives from.
         let ng_f = if d.dot(ng) > 0.0 { -ng } else { ng };
         let ns_f = if d.dot(ns) > 0.0 { -ns } else { ns };
-        let specular = reflections + refractions;
         let surface = tlas.instances[hit.instance as usize].surface;
         if surface.is_specular() {
             if specular == 0 {
@@ -501,9 +515,12 @@ fn trace_photon(
                 let q = optics::roulette_survival(flux, flux0);
                 if rng.next_f32() >= q {
                     stats.photons_roulette += 1;
+                    stats.flux_roulette += optics::finite_or_zero(flux).as_dvec3();
                     return;
                 }
-                flux /= q;
+                let boosted = flux / q;
+                stats.flux_roulette -= optics::finite_or_zero(boosted - flux).as_dvec3();
+                flux = boosted;
             }
         }
         match surface {
@@ -527,12 +544,16 @@ fn trace_photon(
                 return;
             }
             Surface::Conductor { f0 } => {
-                flux *= optics::fresnel_schlick(-d.dot(ns_f), f0);
+                let kept = flux * optics::fresnel_schlick(-d.dot(ns_f), f0);
+                stats.flux_absorbed += optics::finite_or_zero(flux - kept).as_dvec3();
+                flux = kept;
                 d = reflect_guarded(d, ns_f, ng_f, stats);
                 o = optics::offset_ray_origin(p, ng_f, scene_scale);
                 reflections += 1;
             }
-            Surface::Dielectric { ior, thin, .. } => {
+            Surface::Dielectric {
+                ior, thin, tint, ..
+            } => {
                 let entering = d.dot(ng) < 0.0;
                 // A thin wall has air on both sides: 1 / ior from either, never TIR.
                 let eta = optics::dielectric_eta(ior, entering, thin);
@@ -566,6 +587,10 @@ fn trace_photon(
                         reflections += 1;
                         continue;
                     };
+                    // The boundary's tint on what crosses it (white for clear glass).
+                    let kept = flux * tint;
+                    stats.flux_absorbed += optics::finite_or_zero(flux - kept).as_dvec3();
+                    flux = kept;
                     d = dt;
                     o = optics::offset_ray_origin(p, -ng_f, scene_scale);
                     if !thin {

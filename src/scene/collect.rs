@@ -94,6 +94,12 @@ pub fn material_params(m: &StandardMaterial) -> MaterialParams {
         thickness: m.thickness,
         attenuation_distance: m.attenuation_distance,
         attenuation_color: GVec3::new(a.red, a.green, a.blue),
+        coverage: match m.alpha_mode {
+            AlphaMode::Blend | AlphaMode::Premultiplied | AlphaMode::Add | AlphaMode::Multiply => {
+                m.base_color.alpha()
+            }
+            _ => 1.0,
+        },
     }
 }
 
@@ -107,6 +113,7 @@ pub fn derived_caustic_material(m: &StandardMaterial) -> CausticMaterial {
             attenuation_color,
             attenuation_distance,
             thin,
+            ..
         } => CausticMaterial::Dielectric {
             ior,
             attenuation_color: color(attenuation_color),
@@ -142,6 +149,8 @@ fn override_surface(m: &CausticMaterial) -> Surface {
             attenuation_color: rgb(attenuation_color),
             attenuation_distance: *attenuation_distance,
             thin: *thin,
+            // An override is clear glass: its colour is the attenuation's.
+            tint: GVec3::ONE,
         },
         CausticMaterial::Mirror { reflectance } => Surface::Conductor {
             f0: rgb(reflectance),

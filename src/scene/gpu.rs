@@ -65,7 +65,7 @@ pub const GPU_DIELECTRIC: u32 = 1;
 pub const GPU_CONDUCTOR: u32 = 2;
 
 /// The three `vec4` rows of a surface: `(kind, ior, thin, attenuation distance)`,
-/// `(attenuation colour, 0)`, `(albedo or f0, 0)`. A clear medium's distance is `3e38`
+/// `(attenuation colour, 0)`, `(albedo, f0 or a dielectric's transmission tint, 0)`. A clear medium's distance is `3e38`
 /// (finite, so no infinity reaches a buffer).
 pub fn material_rows(surface: &Surface) -> [[f32; 4]; 3] {
     let k = |k: u32| f32::from_bits(k);
@@ -80,6 +80,7 @@ pub fn material_rows(surface: &Surface) -> [[f32; 4]; 3] {
             attenuation_color: c,
             attenuation_distance,
             thin,
+            tint,
         } => [
             [
                 k(GPU_DIELECTRIC),
@@ -92,7 +93,7 @@ pub fn material_rows(surface: &Surface) -> [[f32; 4]; 3] {
                 },
             ],
             [c.x, c.y, c.z, 0.0],
-            [1.0, 1.0, 1.0, 0.0],
+            [tint.x, tint.y, tint.z, 0.0],
         ],
         Surface::Conductor { f0 } => [
             [k(GPU_CONDUCTOR), 1.0, 0.0, 3e38],

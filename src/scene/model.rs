@@ -30,6 +30,11 @@ pub enum Surface {
         attenuation_distance: f32,
         /// Thin-walled (a sheet: transmission without bending), as glTF's `thickness = 0`.
         thin: bool,
+        /// What each crossing of the interface lets through, per channel, in [0, 1]: glTF's
+        /// base colour times `transmissionFactor` ("a coloured, transparent foil" on the
+        /// boundary, KHR_materials_volume), blended towards white by a blended material's
+        /// alpha coverage. Fresnel reflection is not tinted. White for clear glass.
+        tint: Vec3,
     },
     /// A conductor mirror, reflectance by Schlick from the normal-incidence colour.
     Conductor {
@@ -65,6 +70,9 @@ pub struct MaterialParams {
     pub attenuation_distance: f32,
     /// Attenuation colour.
     pub attenuation_color: Vec3,
+    /// Coverage of a blended material (its base colour's alpha, `AlphaMode::Blend`): the
+    /// part of the light that meets the surface at all; 1 for opaque and masked materials.
+    pub coverage: f32,
 }
 
 impl Default for MaterialParams {
@@ -78,6 +86,7 @@ impl Default for MaterialParams {
             thickness: 0.0,
             attenuation_distance: f32::INFINITY,
             attenuation_color: Vec3::ONE,
+            coverage: 1.0,
         }
     }
 }
@@ -100,6 +109,7 @@ pub fn classify_material(m: &MaterialParams) -> Surface {
                 f32::INFINITY
             },
             thin: m.thickness <= 0.0,
+            tint: transmission_tint(m),
         }
     } else if m.metallic >= METALLIC_CUTOFF && m.perceptual_roughness <= MIRROR_ROUGHNESS_CUTOFF {
         Surface::Conductor {
@@ -111,6 +121,28 @@ pub fn classify_material(m: &MaterialParams) -> Surface {
                 .clamp(Vec3::ZERO, Vec3::ONE),
         }
     }
+}
+
+/// [`Surface::Dielectric::tint`] of a transmissive material: `base_color` times
+/// `specular_transmission` (the rest of the light that is not reflected is glTF's diffuse
+/// base, no caustic), mixed with white by `1 - coverage` (the uncovered part of a blended
+/// surface passes untouched), each channel clamped to [0, 1]; non-finite inputs count as 1.
+pub fn transmission_tint(m: &MaterialParams) -> Vec3 {
+    let unit = |x: f32| {
+        if x.is_finite() {
+            x.clamp(0.0, 1.0)
+        } else {
+            1.0
+        }
+    };
+    let base = Vec3::new(
+        unit(m.base_color.x),
+        unit(m.base_color.y),
+        unit(m.base_color.z),
+    );
+    let covered = base * unit(m.specular_transmission);
+    let c = unit(m.coverage);
+    Vec3::ONE * (1.0 - c) + covered * c
 }
 
 /// A light that casts caustics, in the light's own units.

@@ -253,6 +253,8 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             refract = optics_hash_unit((*path).task, (*path).bounces | ((*path).split << 8u)) >= r;
         }
         if refract {
+            // The boundary's transmission tint (row 2; white for clear glass).
+            (*path).flux *= scene_material(hit.instance, 2u).xyz;
             (*path).d = t.xyz;
             if !thin {
                 let tdu = refract_guarded((*path).du, nu, ng_f, eta);

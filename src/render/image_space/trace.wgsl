@@ -496,6 +496,8 @@ fn thin_far_wall(v: SpaceView, texel: vec2<i32>, front: vec4<f32>, inst: u32, o:
     }
     let nb = rsm_normal(back);
     *flux *= 1.0 - optics_fresnel_dielectric(abs(dot(d, nb)), optics_dielectric_eta(mb.y, true, true));
+    // The far wall's transmission tint (row 2; white for clear glass).
+    *flux *= mats[3u * (u32(abs(back.w)) - 1u) + 2u].xyz;
     return optics_offset_ray_origin(to_back.pos, select(nb, -nb, dot(d, nb) < 0.0), scale);
 }
 #endif
@@ -566,10 +568,12 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         } else if m0.z > 0.5 {
             d = dir_in;  // thin sheet: no bending
             thin_through = true;
+            flux *= mats[3u * inst + 2u].xyz;  // the boundary's transmission tint
         } else {
             let t = optics_refract(dir_in, n, eta);
             d = t.xyz;
             inside = true;
+            flux *= mats[3u * inst + 2u].xyz;  // the boundary's transmission tint
         }
     }
 #endif
@@ -609,6 +613,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             return;
         }
         flux *= 1.0 - optics_fresnel_dielectric(abs(dot(d, nb)), eta_out);
+        flux *= mats[3u * inst + 2u].xyz;  // the exit's transmission tint
         d = t.xyz;
         let out_side = select(nb, -nb, dot(d, nb) < 0.0);
         o = optics_offset_ray_origin(to_back.pos, out_side, scale);

@@ -174,6 +174,8 @@ fn trace_photon(i: u32) -> PathEnd {
             refract = optics_hash_unit(key, bounces) >= r;
         }
         if refract {
+            // The boundary's transmission tint (row 2; white for clear glass).
+            flux *= scene_material(hit.instance, 2u).xyz;
             d = t.xyz;
             if !thin {
                 medium = select(INVALID, hit.instance, s.entering);

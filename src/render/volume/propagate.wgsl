@@ -200,6 +200,8 @@ fn interact(p: ptr<function, VolPhoton>, n: vec3<f32>, inst: u32, rng: ptr<funct
     } else {
         count(C_REFRACTED);
         nd = t.xyz;
+        // The boundary's transmission tint (row 2; white for clear glass).
+        (*p).flux = vec4((*p).flux.xyz * materials[3u * inst + 2u].xyz, (*p).flux.w);
         if !thin {
             flags ^= F_MEDIUM;
             (*p).normal.w = 0.0;
