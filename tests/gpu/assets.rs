@@ -4,10 +4,13 @@
 //! matrices and instanced meshes. They come without a light, a camera or a floor: each renders
 //! on the headless renderer's stage (`RenderJob::stage`).
 //!
-//! The models are public data, not this repository's: they live in the steering repository's
-//! `shared/khronos/<Model>/<Model>.glb` (with each model's licence), found as `shared/` in the
-//! checkout, `../shared/` beside it (CI), or the folder named by `BEVY_CAUSTICS_SAMPLE_ASSETS`.
-//! The README lists them with their authors and licences.
+//! The models are public data, not this repository's, and are never committed here: they live in
+//! the steering repository's `shared/khronos/<Model>/<Model>.glb` (with each model's licence),
+//! found as `shared/` in the checkout, `../shared/` beside it (CI), or the folder named by
+//! `BEVY_CAUSTICS_SAMPLE_ASSETS`. Where none of those holds them the test says so on stdout and
+//! checks nothing (it cannot fetch them: the tests run offline); with
+//! `BEVY_CAUSTICS_SAMPLE_ASSETS` set it fails instead. The README lists them with their authors
+//! and licences.
 //!
 //! Per model and technique, at 48 x 36 with few photons and frames (the whole test stays near
 //! two minutes on lavapipe): the caustics image is finite and lit, some pixel above
@@ -46,8 +49,8 @@ const BALANCE_TOLERANCE: f64 = 1e-4;
 const W: u32 = 48;
 const H: u32 = 36;
 
-/// Where the sample models are, or a panic naming where to put them.
-pub fn sample_assets_dir() -> PathBuf {
+/// Where the sample models are, or `Err` naming where they were looked for.
+pub fn sample_assets_dir() -> Result<PathBuf, String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let candidates: Vec<PathBuf> = std::env::var_os("BEVY_CAUSTICS_SAMPLE_ASSETS")
         .map(PathBuf::from)
@@ -58,17 +61,12 @@ pub fn sample_assets_dir() -> PathBuf {
         .iter()
         .find(|d| d.join(SAMPLE_ASSETS[0]).is_dir())
         .cloned()
-        .unwrap_or_else(|| {
-            panic!(
+        .ok_or_else(|| {
+            format!(
                 "the sample models are not in any of {candidates:?}: they live in the steering \
                  repository's shared/khronos/<Model>/<Model>.glb (see the README's sample models)"
             )
         })
-}
-
-/// The path of model `name`'s glb.
-pub fn sample_asset(name: &str) -> PathBuf {
-    sample_assets_dir().join(name).join(format!("{name}.glb"))
 }
 
 fn job(scene: PathBuf, technique: CausticsTechnique) -> RenderJob {
@@ -100,10 +98,18 @@ fn sample_assets_render_with_every_technique() {
     if !require_gpu() {
         return;
     }
+    let dir = match sample_assets_dir() {
+        Ok(dir) => dir,
+        Err(e) if std::env::var_os("BEVY_CAUSTICS_SAMPLE_ASSETS").is_some() => panic!("{e}"),
+        Err(e) => {
+            println!("sample assets NOT RUN: {e}");
+            return;
+        }
+    };
     let t_all = Instant::now();
     let mut failures = Vec::new();
     for name in SAMPLE_ASSETS {
-        let path = sample_asset(name);
+        let path = dir.join(name).join(format!("{name}.glb"));
         for technique in [
             CausticsTechnique::Aaps,
             CausticsTechnique::PhotonMap,
