@@ -146,14 +146,14 @@ impl Default for RenderJob {
 }
 
 #[derive(Resource, Clone)]
-struct Job(RenderJob);
+pub(super) struct Job(pub(super) RenderJob);
 
 #[derive(Resource, Clone, Default)]
-struct Shared(Arc<Mutex<Outcome>>);
+pub(super) struct Shared(pub(super) Arc<Mutex<Outcome>>);
 
 #[derive(Default)]
-struct Outcome {
-    error: Option<String>,
+pub(super) struct Outcome {
+    pub(super) error: Option<String>,
     report: RenderReport,
     twin_raw: Vec<u8>,
     snapshot: Option<crate::render::readback::CausticsSnapshot>,
@@ -162,7 +162,7 @@ struct Outcome {
 }
 
 #[derive(Resource, Default, PartialEq, Debug, Clone, Copy)]
-enum Phase {
+pub(super) enum Phase {
     #[default]
     Loading,
     Spawned(u32),
@@ -277,7 +277,10 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
             job.volume.clone(),
         ))
         .init_resource::<super::volume::VolumesFitted>()
-        .add_systems(Update, (stage, drive, super::volume::fit_volumes).chain());
+        .add_systems(
+            Update,
+            (super::stage::stage, drive, super::volume::fit_volumes).chain(),
+        );
     if job.mark_lights {
         app.add_systems(Update, crate::mark_every_light);
     }
@@ -532,62 +535,14 @@ fn drive(
                 if job.0.technique != CausticsTechnique::Reference {
                     readback.request();
                 }
-                commands
-                    .spawn(Readback::texture(handles.target.clone()))
-                    .observe(
-                        |ev: On<ReadbackComplete>, shared: Res<Shared>, mut commands: Commands| {
-                            if let Ok(mut o) = shared.0.lock() {
-                                o.report.frame_rgba8 = ev.data.clone();
-                            }
-                            // A readback repeats every frame until its entity goes.
-                            commands.entity(ev.entity).despawn();
-                        },
-                    );
-                if let Some(twin) = &handles.twin {
-                    commands.spawn(Readback::texture(twin.clone())).observe(
-                        |ev: On<ReadbackComplete>, shared: Res<Shared>, mut commands: Commands| {
-                            if let Ok(mut o) = shared.0.lock() {
-                                o.twin_raw = ev.data.clone();
-                            }
-                            commands.entity(ev.entity).despawn();
-                        },
-                    );
-                }
+                read_back_targets(&mut commands, &handles);
                 *phase = Phase::Finishing(0);
             } else {
                 *phase = Phase::Measuring(n + 1);
             }
         }
         Phase::Finishing(n) => {
-            if job.0.technique != CausticsTechnique::Reference
-                && let Ok(mut o) = shared.0.lock()
-            {
-                while let Some(snap) = readback.poll() {
-                    if job.0.every_frame {
-                        o.report.frame_counters.push(snap.counters.to_vec());
-                        o.report.frame_caustics.push(snap.image.clone());
-                    }
-                    o.snapshot = Some(snap);
-                }
-            }
-            let gpu = job.0.technique != CausticsTechnique::Reference;
-            let (caustics_in, frames_in) = shared.0.lock().map_or((false, false), |o| {
-                let caustics = o.snapshot.is_some() && readback.pending() == 0;
-                let twin = handles.twin.is_none() || !o.twin_raw.is_empty();
-                (caustics, !o.report.frame_rgba8.is_empty() && twin)
-            });
-            // The last measured frame's readbacks are all taken: the cameras have nothing
-            // left to render for this job.
-            if gpu && caustics_in {
-                commands.queue(|world: &mut World| {
-                    let mut q = world.query_filtered::<&mut Camera, With<JobCamera>>();
-                    for mut cam in q.iter_mut(world) {
-                        cam.is_active = false;
-                    }
-                });
-            }
-            let waiting = !frames_in || (gpu && !caustics_in);
-            if waiting && n < 600 {
+            if finishing(&mut commands, &job.0, &shared, &handles, &readback) && n < 600 {
                 *phase = Phase::Finishing(n + 1);
                 return;
             }
@@ -599,6 +554,68 @@ fn drive(
             exit.write(AppExit::Success);
         }
     }
+}
+
+/// The last measured frame's render targets (the view and the linear twin), read back once.
+fn read_back_targets(commands: &mut Commands, handles: &Handles) {
+    commands
+        .spawn(Readback::texture(handles.target.clone()))
+        .observe(
+            |ev: On<ReadbackComplete>, shared: Res<Shared>, mut commands: Commands| {
+                if let Ok(mut o) = shared.0.lock() {
+                    o.report.frame_rgba8 = ev.data.clone();
+                }
+                // A readback repeats every frame until its entity goes.
+                commands.entity(ev.entity).despawn();
+            },
+        );
+    if let Some(twin) = &handles.twin {
+        commands.spawn(Readback::texture(twin.clone())).observe(
+            |ev: On<ReadbackComplete>, shared: Res<Shared>, mut commands: Commands| {
+                if let Ok(mut o) = shared.0.lock() {
+                    o.twin_raw = ev.data.clone();
+                }
+                commands.entity(ev.entity).despawn();
+            },
+        );
+    }
+}
+
+/// Stage `Finishing`: takes the readbacks of the last measured frame as they arrive; `true`
+/// while some are still to come. Once the caustics are in, the job's cameras go off: they have
+/// nothing left to render for this job.
+fn finishing(
+    commands: &mut Commands,
+    job: &RenderJob,
+    shared: &Shared,
+    handles: &Handles,
+    readback: &crate::render::readback::CausticsReadback,
+) -> bool {
+    let gpu = job.technique != CausticsTechnique::Reference;
+    let Ok(mut o) = shared.0.lock() else {
+        return false;
+    };
+    if gpu {
+        while let Some(snap) = readback.poll() {
+            if job.every_frame {
+                o.report.frame_counters.push(snap.counters.to_vec());
+                o.report.frame_caustics.push(snap.image.clone());
+            }
+            o.snapshot = Some(snap);
+        }
+    }
+    let caustics_in = o.snapshot.is_some() && readback.pending() == 0;
+    let twin_in = handles.twin.is_none() || !o.twin_raw.is_empty();
+    let frames_in = !o.report.frame_rgba8.is_empty() && twin_in;
+    if gpu && caustics_in {
+        commands.queue(|world: &mut World| {
+            let mut q = world.query_filtered::<&mut Camera, With<JobCamera>>();
+            for mut cam in q.iter_mut(world) {
+                cam.is_active = false;
+            }
+        });
+    }
+    !frames_in || (gpu && !caustics_in)
 }
 
 /// Stage `Loading`: `Ok(true)` once the glTF and its scene are loaded; `Err` with one line if
@@ -679,7 +696,7 @@ fn spawn_cameras(
             settle_frames: job.settle_frames,
             ..default()
         };
-    let exposure = job_exposure(job);
+    let exposure = super::stage::job_exposure(job);
     let tonemapping = if job.linear {
         Tonemapping::None
     } else {
@@ -868,51 +885,9 @@ fn finish_report(
     } else {
         o.report.frame_rgba8 = data;
     }
-    o.report.exposure = job_exposure(job).exposure();
+    o.report.exposure = super::stage::job_exposure(job).exposure();
     if o.report.frame_rgba8.len() != (w * h * 4) as usize {
         o.error
             .get_or_insert("the frame readback did not arrive".to_string());
-    }
-}
-
-/// The job's camera exposure: its EV100, else the stage's sunlit one on a stage, else Bevy's
-/// default.
-fn job_exposure(job: &RenderJob) -> bevy::camera::Exposure {
-    let stage = job.stage.then_some(super::stage::STAGE_EV100);
-    job.ev100
-        .or(stage)
-        .map_or_else(bevy::camera::Exposure::default, |ev100| {
-            bevy::camera::Exposure { ev100 }
-        })
-}
-
-/// Stage `Spawned(2)` of a job with `stage`: measure the model and build the stage (once);
-/// a model with no mesh fails the job.
-fn stage(
-    mut commands: Commands,
-    job: Res<Job>,
-    phase: Res<Phase>,
-    shared: Res<Shared>,
-    built: Option<Res<super::stage::StageLayout>>,
-    meshes: Query<(&Mesh3d, &GlobalTransform), Without<super::stage::StagePart>>,
-    (mut mesh_assets, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
-    mut exit: MessageWriter<AppExit>,
-) {
-    if !job.0.stage || built.is_some() || *phase != Phase::Spawned(2) {
-        return;
-    }
-    let aspect = job.0.width as f32 / job.0.height.max(1) as f32;
-    if let Err(e) = super::stage::build_stage(
-        &mut commands,
-        &meshes,
-        &mut mesh_assets,
-        &mut materials,
-        aspect,
-    ) {
-        if let Ok(mut o) = shared.0.lock() {
-            o.error
-                .get_or_insert(format!("{}: {e}", job.0.scene.display()));
-        }
-        exit.write(AppExit::error());
     }
 }

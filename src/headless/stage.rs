@@ -161,3 +161,45 @@ pub(crate) fn build_stage(
     commands.insert_resource(layout.clone());
     Ok(layout)
 }
+
+/// Stage `Spawned(2)` of a job with `stage`: measure the model and build the stage (once);
+/// a model with no mesh fails the job.
+pub(super) fn stage(
+    mut commands: Commands,
+    job: Res<super::job::Job>,
+    phase: Res<super::job::Phase>,
+    shared: Res<super::job::Shared>,
+    built: Option<Res<StageLayout>>,
+    meshes: Query<(&Mesh3d, &GlobalTransform), Without<StagePart>>,
+    (mut mesh_assets, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
+    mut exit: MessageWriter<AppExit>,
+) {
+    if !job.0.stage || built.is_some() || *phase != super::job::Phase::Spawned(2) {
+        return;
+    }
+    let aspect = job.0.width as f32 / job.0.height.max(1) as f32;
+    if let Err(e) = build_stage(
+        &mut commands,
+        &meshes,
+        &mut mesh_assets,
+        &mut materials,
+        aspect,
+    ) {
+        if let Ok(mut o) = shared.0.lock() {
+            o.error
+                .get_or_insert(format!("{}: {e}", job.0.scene.display()));
+        }
+        exit.write(AppExit::error());
+    }
+}
+
+/// The job's camera exposure: its EV100, else the stage's sunlit one on a stage, else Bevy's
+/// default.
+pub(super) fn job_exposure(job: &super::RenderJob) -> bevy::camera::Exposure {
+    let stage = job.stage.then_some(STAGE_EV100);
+    job.ev100
+        .or(stage)
+        .map_or_else(bevy::camera::Exposure::default, |ev100| {
+            bevy::camera::Exposure { ev100 }
+        })
+}
