@@ -166,9 +166,11 @@ pub(crate) fn build_stage(
 /// a model with no mesh fails the job.
 pub(super) fn stage(
     mut commands: Commands,
-    job: Res<super::job::Job>,
-    phase: Res<super::job::Phase>,
-    shared: Res<super::job::Shared>,
+    (job, phase, shared): (
+        Res<super::job::Job>,
+        Res<super::job::Phase>,
+        Res<super::job::Shared>,
+    ),
     built: Option<Res<StageLayout>>,
     meshes: Query<(&Mesh3d, &GlobalTransform), Without<StagePart>>,
     (mut mesh_assets, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
