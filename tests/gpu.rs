@@ -5,9 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use bevy_caustics::headless::{RenderJob, find_adapter, run};
-
-static GPU: Mutex<()> = Mutex::new(());
+use bevy_caustics::headless::{RenderJob, run};
+use support::{GPU, require_gpu};
 
 #[path = "gpu/aaps.rs"]
 mod aaps;
@@ -29,6 +28,8 @@ mod many_parts;
 mod pay_for_use;
 #[path = "gpu/photon_map.rs"]
 mod photon_map;
+#[path = "gpu/support.rs"]
+mod support;
 #[path = "gpu/thin.rs"]
 mod thin;
 #[path = "gpu/twins.rs"]
@@ -39,8 +40,6 @@ mod volume;
 mod volume_modes;
 #[path = "gpu/webgpu.rs"]
 mod webgpu;
-#[path = "gpu/window.rs"]
-mod window;
 
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -123,20 +122,6 @@ fn closed_form_error(
     let (mean, px) = bevy_caustics::reference::plane_region_mean(img, &cam, *n, *d, region);
     assert!(px > 200, "{}: {px} px in the region", desc.name);
     (mean, px, mean / expect - 1.0)
-}
-
-fn require_gpu() -> bool {
-    match find_adapter() {
-        Ok(name) => {
-            println!("adapter: {name}");
-            true
-        }
-        Err(e) if std::env::var_os("BEVY_CAUSTICS_ALLOW_NO_GPU").is_some() => {
-            println!("skipped: {e}");
-            false
-        }
-        Err(e) => panic!("{e}"),
-    }
 }
 
 /// The composite adds exactly albedo / π · E · exposure: the frame with caustics minus the

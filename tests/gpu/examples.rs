@@ -33,17 +33,6 @@ const SIZE: (u32, u32) = (160, 90);
 /// The examples, in the order the README lists them.
 const EXAMPLES: [&str; 5] = ["minimal", "showcase", "aaps", "volumes", "gltf_viewer"];
 
-pub(super) fn example_exe(name: &str) -> PathBuf {
-    // target/release/deps/gpu-* -> target/release/examples/<name>
-    let exe = std::env::current_exe().unwrap();
-    exe.parent()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .join("examples")
-        .join(name)
-}
-
 struct Run {
     png: image::RgbImage,
     stdout: String,
@@ -53,7 +42,7 @@ struct Run {
 /// Run example `name` offscreen (no display) into `out`, with extra environment.
 fn run_example(name: &str, out: &Path, size: (u32, u32), env: &[(&str, &str)]) -> Run {
     let start = Instant::now();
-    let mut cmd = Command::new(example_exe(name));
+    let mut cmd = Command::new(super::support::example_exe(name));
     cmd.env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
         .env("CAUSTICS_EXAMPLE_OUT", out)

@@ -380,7 +380,7 @@ fn malformed_files_are_refused_in_one_line() {
         }
     }
     // The glTF viewer, offscreen, on a file the parser refuses and one whose loader panics.
-    let viewer = super::examples::example_exe("gltf_viewer");
+    let viewer = super::support::example_exe("gltf_viewer");
     for name in ["wrong_type.gltf", "accessor_out_of_range.gltf"] {
         let env = [
             ("CAUSTICS_EXAMPLE_OUT", out.to_str().unwrap()),
