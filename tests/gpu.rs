@@ -236,14 +236,7 @@ fn empty_scene_dispatches_nothing() {
 }
 
 fn render_example() -> PathBuf {
-    // target/release/deps/gpu-* -> target/release/examples/render
-    let exe = std::env::current_exe().unwrap();
-    exe.parent()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .join("examples")
-        .join("render")
+    support::example_exe("render")
 }
 
 fn cli(args: &[&str]) -> (i32, String) {
