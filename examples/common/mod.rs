@@ -25,9 +25,10 @@ use bevy::camera::RenderTarget;
 use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll, MouseScrollUnit};
 use bevy::prelude::*;
-use bevy::render::RenderPlugin;
+use bevy::render::render_resource::PipelineCache;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
+use bevy::render::{Render, RenderApp, RenderPlugin, RenderSystems};
 use bevy::time::TimeUpdateStrategy;
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
@@ -98,6 +99,8 @@ struct OffscreenTarget {
     image: Handle<Image>,
     path: std::path::PathBuf,
     frames: u32,
+    /// `CAUSTICS_EXAMPLE_FRAMES`: the countdown starts again from here while a pipeline compiles.
+    countdown: u32,
     seen: u32,
     shot: bool,
     saved: Option<Result<(), String>>,
@@ -121,6 +124,7 @@ impl Plugin for Offscreen {
             image: Handle::default(),
             path,
             frames,
+            countdown: frames,
             seen: 0,
             shot: false,
             saved: None,
@@ -130,7 +134,27 @@ impl Plugin for Offscreen {
         .add_systems(Startup, inspector_only_on_request)
         .add_systems(Update, dark_caustics_on_request)
         .add_systems(Last, (retarget_cameras, count_and_shoot).chain());
+        let pending = PipelinesPending::default();
+        app.insert_resource(pending.clone());
+        if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
+            render_app.insert_resource(pending).add_systems(
+                Render,
+                count_pending_pipelines.in_set(RenderSystems::Cleanup),
+            );
+        }
     }
+}
+
+/// Pipelines queued or compiling in the render world's cache. Pipelines compile on other
+/// threads over several frames (longer on a loaded machine), and a frame drawn before its
+/// pipelines are ready misses what they draw (the inspector's images, egui): the offscreen
+/// countdown restarts while any is pending.
+#[derive(Resource, Clone, Default)]
+struct PipelinesPending(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+
+fn count_pending_pipelines(cache: Res<PipelineCache>, pending: Res<PipelinesPending>) {
+    let n = cache.waiting_pipelines().count();
+    pending.0.store(n, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// Offscreen, the inspector window stays closed (its timings change from run to run) unless
@@ -221,6 +245,7 @@ fn count_and_shoot(
     mut target: ResMut<OffscreenTarget>,
     cameras: Query<(), With<bevy_caustics::Caustics>>,
     readback: Res<CausticsReadback>,
+    pending: Res<PipelinesPending>,
     mut exit: MessageWriter<AppExit>,
 ) {
     if cameras.is_empty() {
@@ -274,6 +299,10 @@ fn count_and_shoot(
             }
             target.saved = None;
         }
+        return;
+    }
+    if pending.0.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        target.frames = target.countdown;
         return;
     }
     target.frames = target.frames.saturating_sub(1);

@@ -44,14 +44,21 @@ pub const CAUSTICS_BUFFER_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
 
 /// The names of the caustics passes dispatched, shared by the main and render worlds. Each
 /// pass adds its name when it records GPU work; tools drain it (see
-/// [`CausticsDispatchLog::take`]). Empty for a scene that needs no pass.
+/// [`CausticsDispatchLog::take`]). Empty for a scene that needs no pass. A game that never
+/// drains it holds at most [`CausticsDispatchLog::CAPACITY`] names (the oldest go first).
 #[derive(Resource, Clone, Default, Debug)]
 pub struct CausticsDispatchLog(Arc<Mutex<Vec<&'static str>>>);
 
 impl CausticsDispatchLog {
+    /// Names kept at most: hundreds of frames of every pass, 64 KiB.
+    pub const CAPACITY: usize = 4096;
+
     /// Record that `pass` was dispatched.
     pub fn record(&self, pass: &'static str) {
         if let Ok(mut v) = self.0.lock() {
+            if v.len() >= Self::CAPACITY {
+                v.drain(..Self::CAPACITY / 2);
+            }
             v.push(pass);
         }
     }
@@ -349,4 +356,25 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
             prepare_caustics_buffers.in_set(RenderSystems::PrepareResources),
         ),
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CausticsDispatchLog;
+
+    /// A game never drains the log: an hour of frames holds no more than its capacity, and a
+    /// tool that drains every frame sees every name.
+    #[test]
+    fn dispatch_log_is_bounded() {
+        let log = CausticsDispatchLog::default();
+        for _ in 0..216_000 {
+            log.record("caustics/aaps/trace");
+        }
+        let kept = log.take();
+        assert!(!kept.is_empty() && kept.len() <= CausticsDispatchLog::CAPACITY);
+        log.record("a");
+        log.record("b");
+        assert_eq!(log.take(), ["a", "b"]);
+        assert!(log.take().is_empty());
+    }
 }
