@@ -99,8 +99,6 @@ struct OffscreenTarget {
     image: Handle<Image>,
     path: std::path::PathBuf,
     frames: u32,
-    /// `CAUSTICS_EXAMPLE_FRAMES`: the countdown starts again from here while a pipeline compiles.
-    countdown: u32,
     seen: u32,
     shot: bool,
     saved: Option<Result<(), String>>,
@@ -124,7 +122,6 @@ impl Plugin for Offscreen {
             image: Handle::default(),
             path,
             frames,
-            countdown: frames,
             seen: 0,
             shot: false,
             saved: None,
@@ -145,12 +142,15 @@ impl Plugin for Offscreen {
     }
 }
 
-/// Pipelines queued or compiling in the render world's cache. Pipelines compile on other
-/// threads over several frames (longer on a loaded machine), and a frame drawn before its
-/// pipelines are ready misses what they draw (the inspector's images, egui): the offscreen
-/// countdown restarts while any is pending.
+/// Pipelines queued or compiling in the render world's cache. A pipeline waits for its shader
+/// asset, which loads on another thread (longer on a loaded machine), and a frame drawn before
+/// its pipelines are ready misses what they draw (the inspector's images, egui): the offscreen
+/// picture is taken at least [`AFTER_LAST_PIPELINE`] frames after the last one was ready.
 #[derive(Resource, Clone, Default)]
 struct PipelinesPending(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+
+/// Frames between the last pipeline ready and the offscreen picture.
+const AFTER_LAST_PIPELINE: u32 = 4;
 
 fn count_pending_pipelines(cache: Res<PipelineCache>, pending: Res<PipelinesPending>) {
     let n = cache.waiting_pipelines().count();
@@ -301,11 +301,13 @@ fn count_and_shoot(
         }
         return;
     }
-    if pending.0.load(std::sync::atomic::Ordering::Relaxed) > 0 {
-        target.frames = target.countdown;
-        return;
-    }
     target.frames = target.frames.saturating_sub(1);
+    if pending.0.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        // Same frame count as ever when everything compiled in time (the goldens, the
+        // showcase's clock); later, the picture waits for the last pipeline, plus frames for
+        // what it draws to reach the screen.
+        target.frames = target.frames.max(AFTER_LAST_PIPELINE);
+    }
     if target.frames > 0 {
         return;
     }
