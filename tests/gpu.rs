@@ -434,9 +434,10 @@ fn bad_input_warns_once_and_renders() {
     assert!(report.caustics.unwrap().all_finite());
 }
 
-/// Per sample: the frame, the resident size, the Rust heap, the cached BLAS count and the
+/// A churn sample: the frame, the resident size, the Rust heap, the cached BLAS count and the
 /// plugin's GPU memory count (bytes).
-static RSS: Mutex<Vec<(u32, u64, i64, usize, u64)>> = Mutex::new(Vec::new());
+type ChurnSample = (u32, u64, i64, usize, u64);
+static RSS: Mutex<Vec<ChurnSample>> = Mutex::new(Vec::new());
 /// 0: the baseline (no caustics components), 1: the churn with the reference technique, 2: the
 /// churn with the technique cycling.
 static CHURN: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
