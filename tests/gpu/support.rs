@@ -1,5 +1,5 @@
 //! What the GPU test binaries share: the lock that runs their Bevy apps one at a time, the
-//! adapter check and the examples' executables.
+//! adapter check, the examples' executables and a global allocator that counts the Rust heap.
 
 use std::path::PathBuf;
 use std::sync::Mutex;
