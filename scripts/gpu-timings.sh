@@ -30,19 +30,19 @@ case "${1:-}" in
     mkdir -p "$pack/deb" /tmp/amd64/partial
     strip -o "$pack/gpu_timings" "$bin"
     gzip -9f "$pack/gpu_timings"
-    # The Vulkan loader, as the device notes bring it (wgpu opens libvulkan.so.1 at run time).
+    # The Vulkan loader and glvnd, as the device notes bring them: wgpu opens libvulkan.so.1 at
+    # run time, and the NVIDIA ICD (libGLX_nvidia.so.0) needs glvnd's libGLdispatch.
     o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
     apt-get $o update -qq
-    (cd "$pack/deb" && apt-get $o download libvulkan1)
+    (cd "$pack/deb" && apt-get $o download libvulkan1 libglvnd0 libegl1 libgl1 libglx0 libopengl0 libgles2)
     du -sh "$pack"
     echo "carry $pack; there run: scripts/gpu-timings.sh --packed --out \$OUT/gpu-timings.md"
     ;;
   --packed)
     shift
-    if ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
-      for f in "$pack"/deb/*.deb; do dpkg -x "$f" /; done
-      ldconfig
-    fi
+    # Always: a machine may have the loader but not glvnd (then no adapter is found).
+    for f in "$pack"/deb/*.deb; do dpkg -x "$f" /; done
+    ldconfig
     icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
     if [[ -z "${VK_DRIVER_FILES:-}" && -f "$icd" ]]; then export VK_DRIVER_FILES="$icd"; fi
     gzip -dc "$pack/gpu_timings.gz" >/tmp/gpu_timings
