@@ -41,7 +41,10 @@ fn accum_add_f32(i: u32, v: f32) {
         return;
     }
     var old = atomicLoad(&accum[i]);
-    for (var k = 0u; k < 256u; k += 1u) {
+    // A failed exchange (but for a spurious failure of the weak one) means another thread's
+    // succeeded, so k contenders need about k tries. The hot words see one add per workgroup
+    // (trace, density_update): a few thousand resident workgroups on the widest GPUs.
+    for (var k = 0u; k < 4096u; k += 1u) {
         let r = atomicCompareExchangeWeak(&accum[i], old, bitcast<u32>(bitcast<f32>(old) + v));
         if r.exchanged {
             return;

@@ -115,32 +115,51 @@ fn variance(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg:
     accum_add_f32(ACCUM_TEXELS + 4u * bitcast<u32>(s.center.w) + 2u, v * s.b.w);
 }
 
+// The sum of D' over the atlas, reduced per workgroup: one float compare-exchange per 64
+// texels on the single C_DENSITY_SUM word, not one per texel (a wide GPU serialised those).
+var<workgroup> wg_density: array<f32, 64>;
+
+@compute @workgroup_size(64)
+fn density_update(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    wg_density[lid] = density_update_texel(id.x);
+    workgroupBarrier();
+    for (var half = 32u; half > 0u; half >>= 1u) {
+        if lid < half {
+            wg_density[lid] += wg_density[lid + half];
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u && wg_density[0] != 0.0 {
+        accum_add_f32(C_DENSITY_SUM, wg_density[0]);
+    }
+}
+
 // Section 3.1.5: D' = D A / A_t + v g, blended with the texel's and its four neighbours'
 // previous densities (inside the light's tile), clamped, rounded down to a square.
-@compute @workgroup_size(64)
-fn density_update(@builtin(global_invocation_id) id: vec3<u32>) {
+// Of texel i, written to density_next; returns it (0 past the atlas or outside a tile).
+fn density_update_texel(i: u32) -> f32 {
     let a = params.atlas.x;
-    if id.x >= a * a {
-        return;
+    if i >= a * a {
+        return 0.0;
     }
-    if !texel_valid(id.x) {
-        density_next[id.x] = 0.0;
-        return;
+    if !texel_valid(i) {
+        density_next[i] = 0.0;
+        return 0.0;
     }
-    let base = ACCUM_TEXELS + 4u * id.x;
+    let base = ACCUM_TEXELS + 4u * i;
     let n = atomicLoad(&accum[base + 1u]);
     let area = select(0.0, accum_f32(base) / f32(n), n > 0u);
     let v = accum_f32(base + 2u);
-    let sent = f32(optics_photon_count(density[id.x]));
+    let sent = f32(optics_photon_count(density[i]));
     if n > 0u {
         atomicAdd(&accum[C_CONTRIBUTING], 1u);
     }
     let suggested = optics_suggested_density(sent, area, params.density.x, v, params.density.y);
-    let x = id.x % a;
-    let y = id.x / a;
+    let x = i % a;
+    let y = i / a;
     let tile = params.atlas.y;
     var prev: array<f32, 5>;
-    prev[0] = density[id.x];
+    prev[0] = density[i];
     var count = 1u;
     let offs = array<vec2<i32>, 4>(vec2(-1, 0), vec2(1, 0), vec2(0, -1), vec2(0, 1));
     for (var k = 0u; k < 4u; k += 1u) {
@@ -156,8 +175,8 @@ fn density_update(@builtin(global_invocation_id) id: vec3<u32>) {
         count += 1u;
     }
     let d = optics_blend_density(suggested, prev, count, params.density.z, params.density.w, params.limits.x);
-    density_next[id.x] = d;
-    accum_add_f32(C_DENSITY_SUM, d);
+    density_next[i] = d;
+    return select(0.0, d, abs(d) <= 3.0e38);
 }
 
 // The frame's photon budget (ours, optics::budget_split): a floor of `params.budget.x` of it

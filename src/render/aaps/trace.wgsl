@@ -133,9 +133,9 @@ fn deposit(path: ptr<function, Path>, pos: vec3<f32>, pu: vec3<f32>, pv: vec3<f3
         vec4(e, area_px),
     );
     if !large {
-        let base = ACCUM_TEXELS + 4u * texel;
-        accum_add_f32(base, min(area_px, 1.0e6));
-        atomicAdd(&accum[base + 1u], 1u);
+        // Summed per run of threads on the same texel by `trace` (one atomic per run).
+        t_area += min(area_px, 1.0e6);
+        t_n += 1u;
     }
 }
 
@@ -143,8 +143,6 @@ fn deposit(path: ptr<function, Path>, pos: vec3<f32>, pu: vec3<f32>, pv: vec3<f3
 fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending: ptr<function, bool>, events: ptr<function, EventBudget>, texel: u32, texel_energy: f32) {
     let scale = params.camera.w;
     let max_bounces = params.caps.z;
-    // Energy words are spread over 4 slots to lower contention on the float CAS loop.
-    let slot4 = (*path).task & 3u;
     // max_bounces <= 128 specular hits (AapsSettings::sanitized), then the diffuse one.
     for (var guard = 0u; guard < 130u; guard += 1u) {
         let hit = bvh_closest_hit((*path).o, (*path).d, 0.0, BVH_FAR);
@@ -162,7 +160,7 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             return;
         }
         if (*path).bounces == 0u {
-            accum_add_f32(C_FLUX_CASTER + slot4, luminance((*path).flux));
+            t_flux.x += flux_finite(luminance((*path).flux));
         }
 #ifdef TRACE_DIELECTRICS
         if (*path).medium != INVALID {
@@ -188,20 +186,20 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
             atomicAdd(&accum[C_CLAMPED], 1u);
         }
         if kind == MAT_DIFFUSE {
-            accum_add_f32(C_FLUX_DEPOSITED + slot4, luminance((*path).flux));
+            t_flux.y += flux_finite(luminance((*path).flux));
             deposit(path, pos, tu.xyz, tv.xyz, ng_f, texel, texel_energy);
             return;
         }
         if (*path).bounces >= max_bounces {
             atomicAdd(&accum[C_MAX_DEPTH], 1u);
-            accum_add_f32(C_FLUX_MAX_DEPTH + slot4, luminance((*path).flux));
+            t_flux.z += flux_finite(luminance((*path).flux));
             return;
         }
         let budget = u32(params.budget.z);
         if !(event_take(events) || event_grant(events, atomicAdd(&accum[C_EVENTS_GRANTED], (*events).next), budget)) {
             // The frame's event budget is spent: the flux in flight is counted, not lost.
             atomicAdd(&accum[C_BUDGET_STOPPED], 1u);
-            accum_add_f32(C_FLUX_MAX_DEPTH + slot4, luminance((*path).flux));
+            t_flux.z += flux_finite(luminance((*path).flux));
             return;
         }
         let nu = differential_normal(inst, hit.slot, tu.xyz, ns_f);
@@ -277,22 +275,93 @@ fn run_path(path: ptr<function, Path>, pending: ptr<function, Path>, has_pending
     }
 }
 
+// What one thread adds to the shared counters, summed over its workgroup by `trace` before
+// any global atomic: every photon adding its flux to the same few words with a float
+// compare-exchange loop serialised a wide GPU (44 ms of trace on an H200 at 2^18 photons, and
+// values dropped at the loop's cap); lavapipe's 8-wide subgroups on 2 cores never showed it.
+var<private> t_flux: vec3<f32>; // lm: reaching a caster, deposited, in flight at the cap or budget
+var<private> t_area: f32;       // pixel areas of this thread's non-large splats (all one texel)
+var<private> t_n: u32;          // their count
+var<private> t_emitted: u32;    // 1 when the thread emitted a photon
+var<workgroup> wg_sum: array<vec4<f32>, 64>;
+var<workgroup> wg_emitted: array<u32, 64>;
+var<workgroup> wg_texel: array<u32, 64>;
+var<workgroup> wg_area: array<f32, 64>;
+var<workgroup> wg_n: array<u32, 64>;
+
+// A finite flux, else 0 (as accum_add_f32 skips a non-finite value).
+fn flux_finite(v: f32) -> f32 {
+    return select(0.0, v, abs(v) <= 3.0e38);
+}
+
 @compute @workgroup_size(64)
 fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let task = (wid.y * nwg.x + wid.x) * 64u + lid;
+    let group = wid.y * nwg.x + wid.x;
+    let texel = trace_task(group * 64u + lid);
+    wg_sum[lid] = vec4(t_flux, 0.0);
+    wg_emitted[lid] = t_emitted;
+    wg_texel[lid] = select(INVALID, texel, t_n != 0u);
+    wg_area[lid] = t_area;
+    wg_n[lid] = t_n;
+    workgroupBarrier();
+    // Consecutive tasks share a quadtree leaf: the first thread of each run of one texel adds
+    // the run's areas and count.
+    let mine = wg_texel[lid];
+    if mine != INVALID && (lid == 0u || wg_texel[lid - 1u] != mine) {
+        var area = 0.0;
+        var n = 0u;
+        for (var j = lid; j < 64u; j += 1u) {
+            if wg_texel[j] != mine {
+                break;
+            }
+            area += wg_area[j];
+            n += wg_n[j];
+        }
+        accum_add_f32(ACCUM_TEXELS + 4u * mine, area);
+        atomicAdd(&accum[ACCUM_TEXELS + 4u * mine + 1u], n);
+    }
+    for (var half = 32u; half > 0u; half >>= 1u) {
+        if lid < half {
+            wg_sum[lid] += wg_sum[lid + half];
+            wg_emitted[lid] += wg_emitted[lid + half];
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        // Workgroups spread over the 4 words of each flux counter.
+        let slot4 = group & 3u;
+        let s = wg_sum[0];
+        if s.x != 0.0 {
+            accum_add_f32(C_FLUX_CASTER + slot4, s.x);
+        }
+        if s.y != 0.0 {
+            accum_add_f32(C_FLUX_DEPOSITED + slot4, s.y);
+        }
+        if s.z != 0.0 {
+            accum_add_f32(C_FLUX_MAX_DEPTH + slot4, s.z);
+        }
+        if wg_emitted[0] != 0u {
+            atomicAdd(&accum[C_EMITTED], wg_emitted[0]);
+        }
+    }
+}
+
+// One task: emit its photon and follow its paths. Returns the task's texel (INVALID when it
+// emits nothing); its sums go to the t_* privates.
+fn trace_task(task: u32) -> u32 {
     let limit = min(atomicLoad(&accum[C_TASKS]), params.caps.y);
     if task >= limit {
-        return;
+        return INVALID;
     }
     let w = quadtree_walk(params.atlas.x, task);
     if w.w == 0u {
-        return;
+        return INVALID;
     }
     let light_index = atlas_tile(w.xy);
     if light_index >= params.atlas.w {
-        return;
+        return INVALID;
     }
-    atomicAdd(&accum[C_EMITTED], 1u);
+    t_emitted = 1u;
     let tile = params.atlas.y;
     let local = w.xy % vec2(tile);
     let uv = quadtree_leaf_sample_uv(local, w.z, tile);
@@ -323,10 +392,10 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     path.dv = ev.d;
     path.flux *= e.weight;
     path.seg_start = path.o;
-    if all(path.flux <= vec3(0.0)) {
-        return;
-    }
     let texel = w.y * params.atlas.x + w.x;
+    if all(path.flux <= vec3(0.0)) {
+        return texel;
+    }
     let texel_energy = luminance(texel_power);
     var pending: Path;
     var has_pending = false;
@@ -342,4 +411,5 @@ fn trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: ve
     if events.left != 0u {
         atomicSub(&accum[C_EVENTS_GRANTED], events.left);
     }
+    return texel;
 }

@@ -576,16 +576,38 @@ fn record_hit(i: u32, p: VolPhoton, pos: vec3<f32>, n: vec3<f32>, tile: u32, til
     hit.flux = vec4(p.flux.xyz, 0.0);
     hits[i] = hit;
     atomicAdd(&tiles[tile], 1u);
-    count_add_f32(C_SPLATTED, dot(p.flux.xyz, vec3(0.2126, 0.7152, 0.0722)));
+    let lm = dot(p.flux.xyz, vec3(0.2126, 0.7152, 0.0722));
+    splatted_lm += select(0.0, lm, abs(lm) <= 3.0e38);
 }
 
+// The flux this thread recorded (lm), summed over the workgroup by `project` before one
+// float compare-exchange on C_SPLATTED: one per photon serialised a wide GPU.
+var<private> splatted_lm: f32;
+var<workgroup> wg_splatted: array<f32, 64>;
+
 @compute @workgroup_size(64)
-fn project(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    project_photon(gid.x);
+    wg_splatted[lid] = splatted_lm;
+    workgroupBarrier();
+    for (var half = 32u; half > 0u; half >>= 1u) {
+        if lid < half {
+            wg_splatted[lid] += wg_splatted[lid + half];
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u && wg_splatted[0] != 0.0 {
+        count_add_f32(C_SPLATTED, wg_splatted[0]);
+    }
+}
+
+// Project one photon of this frame's range onto the face's receivers (or record its deposit).
+fn project_photon(g: u32) {
     // This frame's range of the trace list (every photon that carried flux in).
-    if gid.x >= vp.progress.w || vp.progress.z + gid.x >= vp.counts.x {
+    if g >= vp.progress.w || vp.progress.z + g >= vp.counts.x {
         return;
     }
-    let i = live[vp.progress.z + gid.x];
+    let i = live[vp.progress.z + g];
     if i >= vp.counts.x {
         return;
     }
