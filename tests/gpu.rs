@@ -129,7 +129,7 @@ fn closed_form_error(
 /// known buffer E (the reference image uploaded into the caustics buffer).
 #[test]
 fn composite_adds_albedo_over_pi_times_irradiance() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -207,7 +207,7 @@ fn composite_adds_albedo_over_pi_times_irradiance() {
 /// A scene without a caster dispatches no caustics pass and leaves the buffer empty.
 #[test]
 fn empty_scene_dispatches_nothing() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -249,7 +249,7 @@ fn cli(args: &[&str]) -> (i32, String) {
 /// clear line and exit status 2 with nothing written.
 #[test]
 fn cli_outputs_and_errors() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -362,7 +362,7 @@ fn cli_outputs_and_errors() {
 fn bad_input_warns_once_and_renders() {
     use bevy::prelude::*;
     use bevy_caustics::{CausticLight, CausticMaterial, CausticsVolume};
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -474,7 +474,7 @@ fn churn_for_seven_hundred_frames() {
     use bevy_caustics::scene::CausticsScene;
     use bevy_caustics::{CausticLight, CausticMaterial, CausticsVolume};
     use std::sync::atomic::Ordering;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -634,7 +634,7 @@ fn churn_for_seven_hundred_frames() {
 /// composite): the frame read back from the GPU is finite everywhere.
 #[test]
 fn stiff_and_extreme_cases_gpu() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -32,7 +32,7 @@ fn aaps(name: &str, size: u32, photons: Option<u64>, settings: AapsSettings) -> 
 /// `glass_slab` (the regions of the CPU closed-form tests) within 5 % of the closed form.
 #[test]
 fn aaps_closed_forms() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -54,7 +54,7 @@ fn aaps_closed_forms() {
 /// FLIP printed for the note.
 #[test]
 fn aaps_energy_matches_reference() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -80,7 +80,7 @@ fn aaps_energy_matches_reference() {
 /// (the grid of each texel is square) whose 128² texels hold the adaptive run's photon count.
 #[test]
 fn aaps_adaptive_beats_frozen_uniform() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -132,7 +132,7 @@ fn aaps_adaptive_beats_frozen_uniform() {
 /// left out here to keep the GPU tests within their 15 minutes.)
 #[test]
 fn aaps_error_falls_with_budget() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -175,7 +175,7 @@ fn aaps_error_falls_with_budget() {
 /// validation error stops the renderer.
 #[test]
 fn aaps_splat_buffer_overflow_is_counted() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -203,7 +203,7 @@ fn aaps_splat_buffer_overflow_is_counted() {
 /// a zero photon budget.
 #[test]
 fn aaps_dispatches_nothing_without_work() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -237,7 +237,7 @@ fn aaps_dispatches_nothing_without_work() {
 #[test]
 fn aaps_stereo_traces_once() {
     use bevy_caustics::render::aaps::passes::{SPLAT_PASS, TASK_PASS, TRACE_PASS};
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -252,21 +252,25 @@ fn aaps_stereo_traces_once() {
         ..Default::default()
     })
     .expect("render");
-    let count = |f: &Vec<String>, p: &str| f.iter().filter(|q| q.as_str() == p).count();
-    for (n, f) in report.frame_passes.iter().enumerate() {
-        if f.is_empty() {
-            continue;
-        }
-        assert_eq!(
-            (
-                count(f, TASK_PASS),
-                count(f, TRACE_PASS),
-                count(f, SPLAT_PASS)
-            ),
-            (1, 1, 2),
-            "frame {n}: {f:?}"
-        );
-    }
+    // Counted over the measured frames, not per frame: under Bevy's pipelined rendering the
+    // render world runs beside the main world's next frame, so one frame's log can hold two
+    // render frames' passes (seen with two tests running side by side) and the next none.
+    // Tracing per eye would give two traces per rendered frame: about 24 here.
+    let all: Vec<&String> = report.frame_passes.iter().flatten().collect();
+    let count = |p: &str| all.iter().filter(|q| q.as_str() == p).count();
+    let (tasks, traces, splats) = (count(TASK_PASS), count(TRACE_PASS), count(SPLAT_PASS));
+    let frames = report.frame_passes.len();
+    println!("stereo: {frames} frames, {tasks} task buffers, {traces} traces, {splats} splats");
+    assert!(
+        traces >= frames / 2,
+        "the trace hardly ran: {traces} in {frames} frames"
+    );
+    assert!(
+        traces <= frames + 1,
+        "{traces} traces in {frames} frames: once per eye?"
+    );
+    assert_eq!(tasks, traces, "{:?}", report.frame_passes);
+    assert_eq!(splats, 2 * traces, "{:?}", report.frame_passes);
     let m = compare(
         report.caustics.as_ref().expect("right eye"),
         &reference("glass_sphere"),

@@ -94,7 +94,7 @@ fn job(scene: PathBuf, technique: CausticsTechnique) -> RenderJob {
 /// Every technique on every sample model: finite, lit; the reference's energy balance.
 #[test]
 fn sample_assets_render_with_every_technique() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -131,7 +131,7 @@ fn set(names: &[&str]) -> BTreeSet<String> {
 /// Every row of every technique's table.
 #[test]
 fn work_follows_change() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -196,7 +196,7 @@ fn work_follows_change() {
 /// (largest pixel difference ≤ 1e-5 of the peak, energy within 1e-5).
 #[test]
 fn aaps_keeps_what_it_would_trace_again() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -249,7 +249,7 @@ fn aaps_keeps_what_it_would_trace_again() {
 /// 20's, and it is lit: a settled view shows what it traced, not an empty buffer.
 #[test]
 fn headless_kept_buffer_holds_past_settling() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }

@@ -112,7 +112,7 @@ fn aaps_run(desc: &SceneDesc) -> bevy_caustics::headless::AapsCounters {
 /// within 3 %; the power on the caster within 3 % of the reference's.
 #[test]
 fn aaps_closed_form_energy() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -155,7 +155,7 @@ fn aaps_closed_form_energy() {
 /// Clear glass keeps a path's throughput at 1, so roulette ends no path in the rooms.
 #[test]
 fn photon_map_closed_form_energy() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -223,7 +223,7 @@ fn photon_map_closed_form_energy() {
 /// and never more than the flux that entered.
 #[test]
 fn volume_closed_form_energy() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -276,7 +276,7 @@ fn volume_closed_form_energy() {
 /// 5 % of the reference's (before: +8 %; with one slab +58 %).
 #[test]
 fn volume_open_gem_matches_reference() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -336,7 +336,7 @@ fn volume_open_gem_matches_reference() {
 /// is the expected flux those paths still carried).
 #[test]
 fn event_budget_bounds_the_trace_and_keeps_the_flux() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

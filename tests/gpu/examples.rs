@@ -110,7 +110,7 @@ fn check_caustics(name: &str, stdout: &str) -> f64 {
 
 #[test]
 fn examples_match_their_goldens() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -170,7 +170,7 @@ fn examples_match_their_goldens() {
 /// by the one primary egui context.
 #[test]
 fn inspector_renders_a_live_task_buffer_image() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -48,7 +48,7 @@ fn glass_sphere_job(forward: bool) -> RenderJob {
 /// camera without `Caustics` sees the same scene, so the difference is the composite's.
 #[test]
 fn caustic_without_opting_in_to_deferred() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -73,7 +73,7 @@ fn caustic_without_opting_in_to_deferred() {
 /// composited, and the floor is named in one warning.
 #[test]
 fn forward_receiver_is_named_in_a_warning() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -146,7 +146,7 @@ fn run_timed(
 /// (refusals 20 s, renders 90 s; the times are printed).
 #[test]
 fn cli_edge_cases() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -320,7 +320,7 @@ fn cli_edge_cases() {
 /// refusal on lavapipe.
 #[test]
 fn malformed_files_are_refused_in_one_line() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -405,7 +405,7 @@ fn malformed_files_are_refused_in_one_line() {
 /// grey, or the frame black).
 #[test]
 fn jpeg_textured_gltf_loads_in_the_cli() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

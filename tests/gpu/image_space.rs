@@ -41,7 +41,7 @@ fn image_space(job: RenderJob) -> RenderReport {
 /// `glass_slab` within 10 % of the closed form after 16 frames.
 #[test]
 fn image_space_closed_forms() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -70,7 +70,7 @@ fn image_space_closed_forms() {
 /// water) within 10 % of the CPU reference; RMSE and FLIP printed for the note.
 #[test]
 fn image_space_energy_matches_reference() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -104,7 +104,7 @@ fn image_space_energy_matches_reference() {
 /// pass's median GPU time with each is printed for the note.
 #[test]
 fn image_space_hi_z_matches_linear() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -188,7 +188,7 @@ fn tilt_sun(world: &mut World, frame: u32) {
 ///   the reference falls below 1.5x the settled RMSE within the 8 following frames.
 #[test]
 fn image_space_denoising_pays_and_does_not_smear() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -278,7 +278,7 @@ fn image_space_denoising_pays_and_does_not_smear() {
 /// photons.
 #[test]
 fn image_space_dispatches_nothing_without_work() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -119,7 +119,7 @@ fn counters(r: &RenderReport) -> String {
 /// Every technique's caustic total on both many-part models within its band of the reference's.
 #[test]
 fn many_part_models_agree_with_reference() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -23,7 +23,7 @@ const SWITCHES: u32 = 100;
 fn switching_techniques_frees_their_memory() {
     use bevy::prelude::World;
     use bevy_caustics::{Caustics, CausticsTechnique as T};
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -91,7 +91,7 @@ fn switching_techniques_frees_their_memory() {
 fn specialised_tracer_matches_the_general_one() {
     use bevy::prelude::World;
     use bevy_caustics::render::trace::TraceSpecialization;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -252,7 +252,7 @@ fn assert_same(case: &str, gpu: &GpuGrid, cpu: &PhotonGrid) {
 #[test]
 fn wgsl_grid_build_matches_cpu_exactly() {
     use bevy_caustics::optics::Pcg32;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -322,7 +322,7 @@ fn wgsl_grid_build_matches_cpu_exactly() {
 /// `glass_slab` within 5 % of the closed form after 16 progressive frames.
 #[test]
 fn photon_map_closed_forms() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -363,7 +363,7 @@ fn photon_map_closed_forms() {
 #[test]
 fn photon_map_energy_and_progressive_convergence() {
     use bevy_caustics::headless::PhotonMapCounters;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -439,7 +439,7 @@ fn photon_map_energy_and_progressive_convergence() {
 /// No light, a spot aimed away from every caster, or zero photons: no photon-map pass.
 #[test]
 fn photon_map_dispatches_nothing_without_work() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -477,7 +477,7 @@ fn photon_map_dispatches_nothing_without_work() {
 #[test]
 fn photon_map_shared_memory_matches_per_pixel() {
     use bevy_caustics::PhotonMapSettings;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -535,7 +535,7 @@ fn photon_map_caustics_seen_in_mirror() {
     use bevy_caustics::render::photon_map::view::base_radius;
     use bevy_caustics::render::trace::scene::caster_sphere;
     use bevy_caustics::scene::Surface;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -632,7 +632,7 @@ fn photon_map_caustics_seen_in_mirror() {
 fn photon_map_caustics_seen_through_glass() {
     use bevy::prelude::*;
     use bevy_caustics::{CausticMaterial, Caustics};
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -741,7 +741,7 @@ fn photon_map_stereo_reuses_the_left_eye() {
     use bevy_caustics::render::photon_map::passes::{
         GATHER_PASS, GATHER_RIGHT_PASS, GRID_PASS, TRACE_PASS,
     };
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }

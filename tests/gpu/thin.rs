@@ -232,7 +232,7 @@ fn assert_within(technique: &str, errs: [f32; 3], tol: [f32; 3]) {
 /// reflected or at the bounce cap. Under the old back-face rule the back pane passed nothing.
 #[test]
 fn aaps_thin_walls_closed_form() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -255,7 +255,7 @@ fn aaps_thin_walls_closed_form() {
 /// kernel), and no photon totally reflected or at the bounce cap.
 #[test]
 fn photon_map_thin_walls_closed_form() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -284,7 +284,7 @@ fn photon_map_thin_walls_closed_form() {
 /// a shell whose far wall passed everything would read +4.5 %, a back pane that is not lit -100 %.
 #[test]
 fn image_space_thin_walls_closed_form() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -326,7 +326,7 @@ fn image_space_thin_walls_closed_form() {
 /// the closed-form tests hold volumes to 10 %.
 #[test]
 fn volume_thin_walls_closed_form() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -10,7 +10,7 @@ use super::{GPU, require_gpu};
 fn wgsl_bvh_matches_cpu_bvh() {
     use bevy_caustics::optics::{Pcg32, uniform_sphere};
     use bevy_caustics::scene::gpu::GpuBvh;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -216,7 +216,7 @@ fn f4_bytes(v: &[[f32; 4]]) -> Vec<u8> {
 #[test]
 fn wgsl_optics_match_rust() {
     use bevy_caustics::optics::*;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -332,7 +332,7 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
 #[test]
 fn wgsl_quadtree_walk_matches_rust() {
     use bevy_caustics::optics::{Pcg32, SumQuadtree};
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -408,7 +408,7 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
 fn wgsl_aaps_optics_match_rust() {
     use bevy_caustics::optics::*;
     use glam::Vec3;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -595,7 +595,7 @@ fn wgsl_volume_splat_matches_rust() {
     use bevy_caustics::optics::*;
     use bevy_caustics::volume::{projector_texel_area, volume_splat_axes};
     use glam::Vec3;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -713,7 +713,7 @@ fn vol_test(@builtin(global_invocation_id) id: vec3<u32>) {
 #[test]
 fn wgsl_image_space_optics_match_rust() {
     use bevy_caustics::optics::*;
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -31,7 +31,7 @@ fn volume(
 /// no energy created (flux splatted <= flux entering the volume).
 #[test]
 fn volume_closed_forms_and_energy() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -59,7 +59,7 @@ fn volume_closed_forms_and_energy() {
 /// of the CPU reference; RMSE and FLIP printed for the note.
 #[test]
 fn volume_glass_sphere_against_reference() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -116,7 +116,7 @@ fn move_lower_caster(world: &mut bevy::prelude::World, frame: u32) {
 /// projectors only (the passes of every frame are counted); turning the light re-runs all.
 #[test]
 fn volume_differential_updates_count_passes() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -193,7 +193,7 @@ fn look_up(world: &mut bevy::prelude::World) {
 /// nothing (the camera looks at the sky above `glass_sphere`).
 #[test]
 fn volume_outside_frustum_dispatches_nothing() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -288,7 +288,7 @@ fn empty_volume(world: &mut bevy::prelude::World) {
 /// guard fired, no energy created, no panic, no validation error (the runner fails on one).
 #[test]
 fn volume_stress_cases() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -350,7 +350,7 @@ fn volume_stress_cases() {
 /// volume would have one): light enters, caustics are finite, no energy is created.
 #[test]
 fn volume_cornell_scenes_use_their_gltf_volumes() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -391,7 +391,7 @@ fn volume_cornell_scenes_use_their_gltf_volumes() {
 /// caustics.
 #[test]
 fn volume_stereo_propagates_once() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }

@@ -54,7 +54,7 @@ fn last_with(r: &RenderReport, name: &str) -> Option<usize> {
 /// by photons / traced, already estimates the full energy.
 #[test]
 fn volume_progressive_mode_converges_to_the_full_update() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
@@ -297,7 +297,7 @@ const ROLES: [VolumeGizmoKind; 4] = [
 /// (and in none without it: the progressive test), as often as the splats.
 #[test]
 fn volume_gizmos_draw_each_role_in_its_colour() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }

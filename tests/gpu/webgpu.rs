@@ -77,7 +77,7 @@ fn energies(name: &str, webgpu_limits: bool, disabled_features: WgpuFeatures) ->
 /// and the volumes add their splats in fixed point, within 0.1 % of the blended splats.
 #[test]
 fn webgpu_default_limits_and_missing_features() {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }

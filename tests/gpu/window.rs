@@ -197,7 +197,7 @@ fn caustic(shot: &Shot, hidden: &Shot) -> (usize, f64, (f64, f64)) {
 }
 
 fn window_keeps_caustics(technique: &str) {
-    let _g = GPU.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU.exclusive();
     if !require_gpu() {
         return;
     }
