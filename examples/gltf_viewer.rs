@@ -94,11 +94,14 @@ struct ScenePath {
 struct SceneHandles([UntypedHandle; 2], LoaderPanicCapture);
 
 fn load(mut commands: Commands, path: Res<ScenePath>, assets: Res<AssetServer>) {
+    // Capture before the load starts: the loader runs on another thread at once, and a panic
+    // there before the capture printed Bevy's backtrace (seen on a loaded machine).
+    let capture = LoaderPanicCapture::start();
     let gltf: Handle<Gltf> = assets.load(path.name.clone());
     let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(path.name.clone()));
     commands.insert_resource(SceneHandles(
         [gltf.untyped(), scene.clone().untyped()],
-        LoaderPanicCapture::start(),
+        capture,
     ));
     commands.spawn(WorldAssetRoot(scene));
 }

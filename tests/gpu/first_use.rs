@@ -289,9 +289,11 @@ fn cli_edge_cases() {
         let _ = std::fs::remove_file(&out);
         let out_s = out.to_string_lossy().into_owned();
         full.extend(["--out-exr", &out_s]);
+        // Deadlines against a hang, with room for a cold shader cache and a second test's
+        // app beside this one (a 20 s deadline killed a refusal in the clean-clone run).
         let deadline = Duration::from_secs(match want {
-            Refused(_) => 20,
-            Renders => 90,
+            Refused(_) => 60,
+            Renders => 120,
         });
         let (code, err, secs) = cli_timed(&full, cwd, deadline);
         let errors: Vec<_> = err.lines().filter(|l| l.starts_with("error:")).collect();
@@ -335,7 +337,8 @@ fn malformed_files_are_refused_in_one_line() {
     files.sort();
     assert!(files.len() >= 8, "{files:?}");
     let quiet: [(&str, &str); 0] = [];
-    let deadline = Duration::from_secs(20);
+    // Against a hang (see cli_edge_cases).
+    let deadline = Duration::from_secs(60);
     // One line naming the file, nothing else (a refusal).
     let refused = |name: &str, code: Option<i32>, err: &str| {
         let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
@@ -435,7 +438,7 @@ fn jpeg_textured_gltf_loads_in_the_cli() {
         &render_example(),
         &args,
         &dir,
-        Duration::from_secs(30),
+        Duration::from_secs(90),
         &[("RUST_LOG", "error")],
     );
     assert_eq!(code, Some(0), "{err}");
