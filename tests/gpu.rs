@@ -24,6 +24,8 @@ mod first_use;
 mod image_space;
 #[path = "gpu/many_parts.rs"]
 mod many_parts;
+#[path = "gpu/motion.rs"]
+mod motion;
 #[path = "gpu/pay_for_use.rs"]
 mod pay_for_use;
 #[path = "gpu/photon_map.rs"]

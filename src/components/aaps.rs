@@ -103,6 +103,20 @@ pub struct AapsSettings {
     /// Range [0.05, 128]; at 128 no path can run out before `max_bounces`.
     #[reflect(@0.05_f32..=128.0_f32)]
     pub bounce_budget: f32,
+    /// Frames in the running mean of the shared temporal stage (`render::temporal`): each frame
+    /// traces a freshly rotated sample pattern, so the mean gathers independent photons and a
+    /// still view settles on it rather than on one frame's grain. Default 32 (ours). 1 shows
+    /// each frame alone. Range [1, 1024]. Cost: 48 bytes per pixel and one full-screen pass.
+    /// A moving camera restarts it (no reprojection yet); a changed scene keeps it where the
+    /// caustic did not change (`history_clamp`).
+    #[reflect(@1_u32..=1024_u32)]
+    pub history_frames: u32,
+    /// On a frame in which the scene changed, each pixel's history is clamped to the current
+    /// frame's 3x3 luminance mean ± this many standard deviations (a moved caustic leaves no
+    /// ghost). Default 2 (ours). Range [0, 100]; 0 keeps only the current frame's
+    /// neighbourhood mean where it changed.
+    #[reflect(@0.0_f32..=100.0_f32)]
+    pub history_clamp: f32,
     /// Adapt the density every frame. Default true. `false` freezes it at the uniform
     /// density the budget allows (for comparisons).
     pub adaptive: bool,
@@ -127,6 +141,8 @@ impl Default for AapsSettings {
             budget_floor_share: 0.5,
             point_splat_area: 1.0,
             bounce_budget: 8.0,
+            history_frames: 32,
+            history_clamp: 2.0,
             adaptive: true,
         }
     }
@@ -160,6 +176,8 @@ impl AapsSettings {
             budget_floor_share: finite(self.budget_floor_share, 0.5).clamp(0.0, 1.0),
             point_splat_area: finite(self.point_splat_area, 1.0).clamp(0.0, 16.0),
             bounce_budget: finite(self.bounce_budget, 8.0).clamp(0.05, 128.0),
+            history_frames: self.history_frames.clamp(1, 1024),
+            history_clamp: finite(self.history_clamp, 2.0).clamp(0.0, 100.0),
             adaptive: self.adaptive,
         }
     }

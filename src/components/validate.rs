@@ -246,7 +246,9 @@ pub fn sanitize_aaps(a: &mut AapsSettings, limits: &CausticsLimits) -> Vec<Fix> 
         splat_capacity,
         budget_floor_share,
         point_splat_area,
-        bounce_budget
+        bounce_budget,
+        history_frames,
+        history_clamp
     );
     *a = fixed;
     fixes

@@ -157,22 +157,40 @@ impl SumQuadtree {
 pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 
 /// Where sample `sample` of a leaf lies in the unit square of the whole texture (`size x size`
+/// texels): [`leaf_sample_uv_rotated`] without a frame rotation.
+pub fn leaf_sample_uv(texel: UVec2, sample: u32, size: u32) -> Vec2 {
+    leaf_sample_uv_rotated(texel, sample, size, [0, 0])
+}
+
+/// The rotation of frame `frame`'s sample patterns (two [`pcg_hash`]es of the frame index):
+/// AAPS adds it to every texel's shift, so each frame traces an independent set of photons
+/// and the temporal stage's mean gathers them (issue 28). WGSL twin `quadtree_frame_rotation`.
+pub fn frame_rotation(frame: u32) -> [u32; 2] {
+    let h = pcg_hash(frame ^ 0x2c1b_3c6d);
+    [h, pcg_hash(h ^ 0x297a_2d39)]
+}
+
+/// Where sample `sample` of a leaf lies in the unit square of the whole texture (`size x size`
 /// texels): point `sample` of the R2 Kronecker set
-/// `frac(s + (i + 1/2) (1/g, 1/g^2))`, shifted by `s`, a per-texel Cranley-Patterson rotation
-/// (two [`pcg_hash`]es of the texel index).
+/// `frac(s + r + (i + 1/2) (1/g, 1/g^2))`, shifted by `s`, a per-texel Cranley-Patterson
+/// rotation (two [`pcg_hash`]es of the texel index), and by `r`, the frame's `rotation`
+/// ([`frame_rotation`]), both in 0.32 fixed point.
 ///
 /// Ours, not the thesis's `k x k` grid of cell centres: that grid is the same lattice in every
 /// texel, and it beats against the pixel grid as concentric moiré rings around a focus. The R2
 /// set is low-discrepancy for any count (so densities need not be squares, [`photon_count`]),
 /// and the per-texel rotation makes neighbouring texels' patterns independent; each point is
-/// uniform over its texel (so a photon's energy `power / count` is unbiased). Fixed per texel
-/// (a texel's first `n` points are the same whatever its count), so a settled task buffer
-/// gives the same image every frame. Exact in 0.32 fixed point (wrapping integer arithmetic),
-/// so the WGSL twin `quadtree_leaf_sample_uv` gives the same bits.
-pub fn leaf_sample_uv(texel: UVec2, sample: u32, size: u32) -> Vec2 {
+/// uniform over its texel (so a photon's energy `power / count` is unbiased), whatever the
+/// rotation. For one rotation it is fixed per texel (a texel's first `n` points are the same
+/// whatever its count). Exact in 0.32 fixed point (wrapping integer arithmetic), so the WGSL
+/// twin `quadtree_leaf_sample_uv_rotated` gives the same bits.
+pub fn leaf_sample_uv_rotated(texel: UVec2, sample: u32, size: u32, rotation: [u32; 2]) -> Vec2 {
     let id = texel.y.wrapping_mul(size).wrapping_add(texel.x);
     let h = pcg_hash(id.wrapping_mul(2_654_435_761) ^ 0x5bd1_e995);
-    let shift = [h, pcg_hash(h ^ 0x68e3_1da4)];
+    let shift = [
+        h.wrapping_add(rotation[0]),
+        pcg_hash(h ^ 0x68e3_1da4).wrapping_add(rotation[1]),
+    ];
     let step = |k: usize| {
         // (i + 1/2) a = i a + a / 2, all mod 2^32.
         let x = shift[k]

@@ -95,6 +95,7 @@ pub(crate) fn measure(
     photon_map: Query<&PhotonMapViewState>,
     image_space: (Query<&ImageSpaceViewState>, Option<Res<ImageSpaceScene>>),
     volume: (Query<&VolumeViewState>, Option<Res<VolumeStore>>),
+    temporal: Query<&super::temporal::ViewTemporal>,
 ) {
     let mut m = BTreeMap::new();
     m.insert(
@@ -121,6 +122,13 @@ pub(crate) fn measure(
         "volume",
         views.iter().map(VolumeViewState::gpu_bytes).sum::<u64>()
             + store.map_or(0, |s| s.gpu_bytes()),
+    );
+    m.insert(
+        "temporal",
+        temporal
+            .iter()
+            .map(super::temporal::ViewTemporal::gpu_bytes)
+            .sum(),
     );
     memory.set(m);
 }

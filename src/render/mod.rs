@@ -16,6 +16,7 @@ pub mod photon_map;
 pub mod readback;
 pub mod settle;
 pub mod span;
+pub mod temporal;
 pub mod trace;
 pub mod volume;
 
@@ -234,6 +235,7 @@ pub fn add_frame_systems_for_bench(schedule: &mut bevy::ecs::schedule::Schedule)
             volume::pipelines::queue_volume_pipelines,
             volume::view::prepare_volumes,
             volume::gizmo::prepare_volume_gizmos,
+            temporal::prepare_temporal,
             composite::prepare_composite_pipelines,
             memory::measure,
         )
@@ -345,6 +347,7 @@ pub(crate) fn build(app: &mut App, log: CausticsDispatchLog) {
     photon_map::build(app);
     readback::build(app);
     span::build(app);
+    temporal::build(app);
     memory::build(app);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;

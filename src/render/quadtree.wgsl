@@ -4,9 +4,20 @@
 // leaf_sample_uv (src/optics/aaps.rs): sample `sample` of texel `texel` of a `size x size`
 // texture, the R2 Kronecker set rotated per texel, in 0.32 fixed point (bit-exact with Rust).
 fn quadtree_leaf_sample_uv(texel: vec2<u32>, sample: u32, size: u32) -> vec2<f32> {
+    return quadtree_leaf_sample_uv_rotated(texel, sample, size, vec2(0u));
+}
+
+// frame_rotation (src/optics/aaps.rs): the rotation of a frame's sample patterns.
+fn quadtree_frame_rotation(frame: u32) -> vec2<u32> {
+    let h = optics_pcg_hash(frame ^ 0x2c1b3c6du);
+    return vec2(h, optics_pcg_hash(h ^ 0x297a2d39u));
+}
+
+// leaf_sample_uv_rotated (src/optics/aaps.rs): the same, shifted by the frame's `rotation`.
+fn quadtree_leaf_sample_uv_rotated(texel: vec2<u32>, sample: u32, size: u32, rotation: vec2<u32>) -> vec2<f32> {
     let id = texel.y * size + texel.x;
     let h = optics_pcg_hash((id * 2654435761u) ^ 0x5bd1e995u);
-    let shift = vec2(h, optics_pcg_hash(h ^ 0x68e31da4u));
+    let shift = vec2(h, optics_pcg_hash(h ^ 0x68e31da4u)) + rotation;
     let step = vec2(3242174889u, 2447445414u);
     let x = shift + sample * step + (step >> vec2(1u));
     let cell = vec2<f32>(x >> vec2(8u)) * (1.0 / 16777216.0);

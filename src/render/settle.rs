@@ -48,6 +48,19 @@ struct SettleKey {
     buffer: u64,
 }
 
+/// What changed in a view's inputs since the last frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SettleChange {
+    /// Nothing.
+    #[default]
+    None,
+    /// Only the gathered scene (a light, a caster, a receiver or a material).
+    Scene,
+    /// The camera, the viewport, the technique or its settings, the stereo pairing or the
+    /// caustics buffer (or the view is new).
+    View,
+}
+
 /// Per caustics view (render world): how long its inputs have stayed the same.
 #[derive(Component, Default)]
 pub struct ViewSettle {
@@ -59,6 +72,9 @@ pub struct ViewSettle {
     pub last_ran: bool,
     /// This frame may keep the last result: `settle_frames > 0` and `still >= settle_frames`.
     pub keep: bool,
+    /// What changed since the last frame (the temporal stage keeps its history through a
+    /// change of the scene alone, and drops it on any other).
+    pub change: SettleChange,
     /// The technique kept its last result this frame (set by its prepare system; the
     /// composite then draws the buffer without a pass of the technique having run).
     kept: AtomicBool,
@@ -134,6 +150,7 @@ pub fn track_settle(
                 still: 0,
                 last_ran: false,
                 keep: false,
+                change: SettleChange::View,
                 kept: AtomicBool::new(false),
                 ran: AtomicBool::new(false),
             });
@@ -141,7 +158,20 @@ pub fn track_settle(
         };
         let ran = settle.ran.swap(false, Ordering::Relaxed);
         settle.last_ran = ran;
-        if settle.key.as_ref() == Some(&key) && key.buffer != 0 {
+        settle.change = match &settle.key {
+            Some(k) if *k == key && key.buffer != 0 => SettleChange::None,
+            Some(k)
+                if key.buffer != 0
+                    && SettleKey {
+                        generation: key.generation,
+                        ..k.clone()
+                    } == key =>
+            {
+                SettleChange::Scene
+            }
+            _ => SettleChange::View,
+        };
+        if settle.change == SettleChange::None {
             if ran {
                 settle.still = settle.still.saturating_add(1);
             }

@@ -268,6 +268,42 @@ fn leaf_samples_are_low_discrepancy_and_rotated_per_texel() {
     );
 }
 
+/// The frame rotation (issue 28): a texel's samples stay inside it and evenly spread for any
+/// frame, and one sample's position over 256 frames covers its texel uniformly (each cell of
+/// a 4 x 4 grid holds 8 to 24 of 256; the same sample every frame would fill one cell), so the
+/// temporal stage's mean gathers independent photons.
+#[test]
+fn frame_rotation_moves_every_sample_over_its_texel() {
+    let size = 64u32;
+    let texel = UVec2::new(17, 40);
+    let local = |i: u32, frame: u32| {
+        leaf_sample_uv_rotated(texel, i, size, frame_rotation(frame)) * size as f32
+            - texel.as_vec2()
+    };
+    for frame in [0u32, 1, 2, 1000, u32::MAX] {
+        let mut cells = [0u32; 16];
+        for i in 0..64 {
+            let p = local(i, frame);
+            assert!(p.min_element() >= 0.0 && p.max_element() < 1.0, "{p}");
+            cells[((p.y * 4.0) as usize).min(3) * 4 + ((p.x * 4.0) as usize).min(3)] += 1;
+        }
+        assert!(
+            cells.iter().all(|c| (2..=6).contains(c)),
+            "frame {frame}: {cells:?}"
+        );
+    }
+    let mut cells = [0u32; 16];
+    for frame in 0..256 {
+        let p = local(0, frame);
+        cells[((p.y * 4.0) as usize).min(3) * 4 + ((p.x * 4.0) as usize).min(3)] += 1;
+    }
+    assert!(cells.iter().all(|c| (8..=24).contains(c)), "{cells:?}");
+    assert_eq!(
+        leaf_sample_uv(texel, 5, size),
+        leaf_sample_uv_rotated(texel, 5, size, [0, 0])
+    );
+}
+
 /// The budget: a floor of `share` over the contributing texels, the rest by D' scaled down; the
 /// texels' photons never exceed the budget once it covers the idle texels' minimum, the floor
 /// grows with the budget, share 0 is the thesis's scaling, and bad input stays finite.

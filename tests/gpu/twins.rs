@@ -328,7 +328,8 @@ fn optics_test(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 /// The WGSL quadtree walk (`src/render/quadtree.wgsl`) against `SumQuadtree::walk` for every task
-/// of a random 32x32 density texture, plus tasks past the total.
+/// of a random 32x32 density texture, plus tasks past the total, and its sample positions
+/// (rotated by seven frames' rotations) against `leaf_sample_uv_rotated`.
 #[test]
 fn wgsl_quadtree_walk_matches_rust() {
     use bevy_caustics::optics::{Pcg32, SumQuadtree};
@@ -343,7 +344,7 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&walks) / 2u { return; }
     let w = quadtree_walk(32u, id.x);
     walks[2u * id.x] = w;
-    walks[2u * id.x + 1u] = vec4(bitcast<vec2<u32>>(quadtree_leaf_sample_uv(w.xy, w.z, 32u)), 0u, 0u);
+    walks[2u * id.x + 1u] = vec4(bitcast<vec2<u32>>(quadtree_leaf_sample_uv_rotated(w.xy, w.z, 32u, quadtree_frame_rotation(id.x % 7u))), 0u, 0u);
 }
 "#;
     let src = format!(
@@ -377,12 +378,15 @@ fn walk_test(@builtin(global_invocation_id) id: vec3<u32>) {
         match tree.walk(task as u32) {
             Some((texel, sample, count)) => {
                 assert_eq!(gpu, [texel.x, texel.y, sample, count], "task {task}");
-                // The sample position in the texel (leaf_sample_uv).
+                // The sample position in the texel (leaf_sample_uv_rotated, with the rotation
+                // of frame `task % 7`, frame_rotation).
                 let uv = glam::Vec2::new(
                     f32::from_bits(u(8 * task + 4)),
                     f32::from_bits(u(8 * task + 5)),
                 );
-                let want = bevy_caustics::optics::leaf_sample_uv(texel, sample, size);
+                let rotation = bevy_caustics::optics::frame_rotation(task as u32 % 7);
+                let want =
+                    bevy_caustics::optics::leaf_sample_uv_rotated(texel, sample, size, rotation);
                 worst_uv = worst_uv.max((uv - want).abs().max_element());
                 assert!(
                     (uv - want).abs().max_element() < 1e-6,

@@ -13,7 +13,7 @@
 //!
 //! | what changed | what re-runs |
 //! | --- | --- |
-//! | nothing, for `Caustics::settle_frames` frames | nothing: the caustics buffer keeps the last result, which a new trace would repeat (the task buffer has settled; its photons are a deterministic function of it) |
+//! | nothing, for `Caustics::settle_frames` frames | nothing: the caustics buffer keeps the mean the temporal stage reached (`render::temporal`; each traced frame rotates its sample pattern, so the mean gathers independent photons) |
 //! | the camera moved | task buffer, trace, splats, density update (culling, splat sizes and the task buffer's variance follow the view) |
 //! | a light moved | everything |
 //! | a caster moved | everything |

@@ -9,7 +9,7 @@ struct AapsParams {
     density: vec4<f32>,  // target area (px), variance gain, w_t, min density
     limits: vec4<f32>,   // max density (0: none), photon budget, cull solid angle (sr, 0: off), max anisotropy
     splat: vec4<f32>,    // MSAA threshold (px), min radius, max radius (m), 1: drop large splats
-    budget: vec4<f32>,   // budget floor share, point splat area (px), specular-event budget of the frame, 0
+    budget: vec4<f32>,   // budget floor share, point splat area (px), specular-event budget of the frame, frame index (bitcast u32: the sample rotation)
 }
 
 // A splat (64 bytes). Also the photon record of the variance pass (seed 004 section 3.1.5):

@@ -17,6 +17,7 @@ use super::view::{AapsFrame, AapsStereo, AapsViewState, LEVEL_STRIDE};
 use crate::render::fixed_splat::{self, FixedSplatPipelines};
 use crate::render::settle::ViewSettle;
 use crate::render::span::SpanSettle;
+use crate::render::temporal::{self, TemporalPipelines, ViewTemporal};
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::trace::{TraceSpecialization, wanted_features};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
@@ -69,8 +70,10 @@ pub fn aaps_passes(
         &AapsFrame,
         Option<&AapsStereo>,
         Option<&ViewSettle>,
+        Option<&ViewTemporal>,
     )>,
     states: Query<&AapsViewState>,
+    temporal_pipelines: Option<Res<TemporalPipelines>>,
     scene: Option<Res<TraceSceneBuffers>>,
     pipelines: Res<AapsPipelines>,
     cache: Res<PipelineCache>,
@@ -80,7 +83,13 @@ pub fn aaps_passes(
     fixed: Option<Res<FixedSplatPipelines>>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _, stereo, view_settle) = view.into_inner();
+    let (buffer, prepass, state, _, stereo, view_settle, temporal) = view.into_inner();
+    // The shared temporal stage, once the technique's work is recorded.
+    let blend = |ctx: &mut RenderContext| {
+        if let (Some(t), Some(p)) = (temporal, temporal_pipelines.as_deref()) {
+            temporal::accumulate(ctx, (&cache, p, &settle), t, buffer, &log);
+        }
+    };
     // Fixed-point splats (no FLOAT32_BLENDABLE): the accumulator and its resolve.
     let fixed = match (&state.fixed, fixed.as_deref()) {
         (Some(accumulator), Some(p)) => Some(FixedSplat {
@@ -167,6 +176,7 @@ pub fn aaps_passes(
             fixed.as_ref(),
             &log,
         );
+        blend(&mut ctx);
         view_settle.inspect(|s| s.mark_ran());
         return;
     }
@@ -248,6 +258,7 @@ pub fn aaps_passes(
             name,
         );
     }
+    blend(&mut ctx);
     view_settle.inspect(|s| s.mark_ran());
 }
 

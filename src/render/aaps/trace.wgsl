@@ -364,7 +364,9 @@ fn trace_task(task: u32) -> u32 {
     t_emitted = 1u;
     let tile = params.atlas.y;
     let local = w.xy % vec2(tile);
-    let uv = quadtree_leaf_sample_uv(local, w.z, tile);
+    // Each frame rotates the pattern: the temporal stage's mean gathers independent photons.
+    let frame = bitcast<u32>(params.budget.w);
+    let uv = quadtree_leaf_sample_uv_rotated(local, w.z, tile, quadtree_frame_rotation(frame));
     // Differentials: the spacing of the texel's samples, 1 / sqrt(count) of a texel, along each
     // parameter (inwards at the square's far edges), so splats shrink as the density grows and
     // their overlap stays the same.
@@ -379,7 +381,8 @@ fn trace_task(task: u32) -> u32 {
     path.medium = INVALID;
     path.bounces = 0u;
     path.split = 0u;
-    path.task = task;
+    // The branch choices' key: the task and the frame.
+    path.task = task ^ optics_pcg_hash(frame);
     // The differential rays leave the light at the neighbouring parameters.
     let e = light_emit(light, uv);
     let eu = light_emit(light, uv_u);

@@ -12,6 +12,7 @@ use bevy::render::view::ExtractedView;
 
 use crate::components::{AapsSettings, CausticsTechnique};
 use crate::optics::uniform_density;
+use crate::render::temporal::TemporalAccumulation;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::{CAUSTICS_BUFFER_FORMAT, ExtractedCaustics};
 
@@ -103,6 +104,9 @@ pub struct AapsViewState {
     pub budget: f64,
     /// Photon capacity (tasks traced at most).
     pub photon_capacity: u32,
+    /// Frames traced: the key of the frame's sample rotation
+    /// ([`crate::optics::frame_rotation`]).
+    pub frame: u32,
 }
 
 impl AapsViewState {
@@ -295,6 +299,7 @@ impl AapsViewState {
                 )
             }),
             prev_clip_from_world: None,
+            frame: 0,
             settings,
             budget,
             photon_capacity,
@@ -378,7 +383,12 @@ pub fn params_bytes(
     let events = (state.budget * s.bounce_budget as f64)
         .clamp(1.0, 2.0e9)
         .ceil();
-    for v in [s.budget_floor_share, s.point_splat_area, events as f32, 0.0] {
+    for v in [
+        s.budget_floor_share,
+        s.point_splat_area,
+        events as f32,
+        u(state.frame),
+    ] {
         f(v);
     }
     b
@@ -431,6 +441,9 @@ pub fn prepare_aaps_views(
             && scene.as_ref().is_some_and(|s| s.lights > 0);
         if !active {
             e.remove::<AapsFrame>();
+            if caustics.technique == CausticsTechnique::Aaps {
+                e.remove::<TemporalAccumulation>();
+            }
             if state.is_some() && caustics.technique != CausticsTechnique::Aaps {
                 e.remove::<AapsViewState>();
             }
@@ -497,9 +510,18 @@ pub fn prepare_aaps_views(
             .collect();
         queue.write_buffer(&state.world_from_clip, 0, &inv);
         state.prev_clip_from_world = Some(clip_from_world);
+        state.frame = state.frame.wrapping_add(1);
+        e.insert((
+            AapsFrame,
+            TemporalAccumulation {
+                owner: CausticsTechnique::Aaps,
+                max_history: state.settings.history_frames,
+                clamp_sigma: state.settings.history_clamp,
+                frames: 1,
+            },
+        ));
         if let Some(s) = fresh {
             e.insert(s);
         }
-        e.insert(AapsFrame);
     }
 }

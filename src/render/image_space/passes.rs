@@ -21,6 +21,7 @@ use super::view::{
     SMALL_STRIDE,
 };
 use crate::render::span::SpanSettle;
+use crate::render::temporal::{self, TemporalPipelines, ViewTemporal};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer, photon_groups};
 
 /// The RSM layers (opaque, caster front, caster back); the spans time the first light's.
@@ -166,8 +167,10 @@ pub fn image_space_passes(
         &ImageSpaceViewState,
         &ImageSpaceFrame,
         Option<&crate::render::settle::ViewSettle>,
+        Option<&ViewTemporal>,
     )>,
     scene: Option<Res<ImageSpaceScene>>,
+    temporal_pipelines: Option<Res<TemporalPipelines>>,
     pipelines: Option<Res<ImageSpacePipelines>>,
     specialization: Option<Res<crate::render::trace::TraceSpecialization>>,
     cache: Res<PipelineCache>,
@@ -175,7 +178,7 @@ pub fn image_space_passes(
     settle: Res<SpanSettle>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _, view_settle) = view.into_inner();
+    let (buffer, prepass, state, _, view_settle, temporal) = view.into_inner();
     let (Some(scene), Some(pipelines)) = (scene, pipelines) else {
         return;
     };
@@ -313,6 +316,10 @@ pub fn image_space_passes(
         );
     }
     debug_assert!(IMAGE_SPACE_COUNTERS.len() as u64 <= COUNTER_WORDS);
+    // The shared temporal stage, once SVGF wrote this frame's output.
+    if let (Some(t), Some(p)) = (temporal, temporal_pipelines.as_deref()) {
+        temporal::accumulate(&mut ctx, (&cache, p, &settle), t, buffer, &log);
+    }
     view_settle.inspect(|s| s.mark_ran());
 }
 

@@ -14,6 +14,7 @@ use bevy::render::view::ExtractedView;
 use super::pipelines::{RSM_DEPTH_FORMAT, RSM_FORMAT};
 use crate::components::{CausticsTechnique, ImageSpaceSettings};
 use crate::optics::{cone_around_sphere, photon_flux_scale};
+use crate::render::temporal::TemporalAccumulation;
 use crate::render::trace::scene::{ExtractedCausticsScene, GpuLight, caster_sphere, gpu_lights};
 use crate::render::volume::gpu::VolumeScene;
 use crate::render::{ExtractedCaustics, view_texture};
@@ -446,6 +447,8 @@ pub struct ImageSpaceViewState {
     pub frame: u32,
     /// The scene generation of the last frame (a change resets the history).
     pub generation: Option<u64>,
+    /// Frames since the SVGF history was last reset (the shared temporal stage's `frames`).
+    pub since_reset: u32,
     /// The previous frame's `clip_from_world`.
     pub prev_clip_from_world: Option<Mat4>,
     /// Sanitised settings of this frame.
@@ -627,6 +630,7 @@ impl ImageSpaceViewState {
             ),
             frame: 0,
             generation: None,
+            since_reset: 0,
             prev_clip_from_world: None,
             settings,
             photons: 0,
@@ -695,6 +699,9 @@ pub fn prepare_image_space_views(
             && scene.is_some();
         if !active {
             commands.entity(entity).remove::<ImageSpaceFrame>();
+            if caustics.technique == CausticsTechnique::ImageSpace {
+                commands.entity(entity).remove::<TemporalAccumulation>();
+            }
             if state.is_some() && caustics.technique != CausticsTechnique::ImageSpace {
                 commands.entity(entity).remove::<ImageSpaceViewState>();
             }
@@ -727,15 +734,37 @@ pub fn prepare_image_space_views(
             .min(crate::limits::MAX_IMAGE_SPACE_PHOTONS) as u32;
         state.photons = photons;
         write_uniforms(&queue, state, scene, view, photons);
+        let temporal = temporal_request(state);
         if let Some(s) = fresh.take() {
             commands.entity(entity).insert(s);
         }
+        match temporal {
+            Some(t) => commands.entity(entity).insert(t),
+            None => commands.entity(entity).remove::<TemporalAccumulation>(),
+        };
         if photons > 0 {
             commands.entity(entity).insert(ImageSpaceFrame);
         } else {
             commands.entity(entity).remove::<ImageSpaceFrame>();
         }
     }
+}
+
+/// What image space asks of the shared temporal stage (`render::temporal`) with SVGF on: its
+/// output is an exponential mean of weight `alpha_color`, worth `(2 - a) / a` frames (9 at
+/// the default 0.2) once its history is that long, so the stage keeps a history of as many
+/// frames. On a still view it only passes SVGF's output on; through a change of the scene,
+/// which resets SVGF, it keeps a running mean where the caustic did not change.
+fn temporal_request(state: &ImageSpaceViewState) -> Option<TemporalAccumulation> {
+    let s = &state.settings;
+    let a = s.alpha_color.clamp(0.01, 1.0);
+    let worth = ((2.0 - a) / a).ceil() as u32;
+    s.denoise.then_some(TemporalAccumulation {
+        owner: CausticsTechnique::ImageSpace,
+        max_history: worth,
+        clamp_sigma: crate::render::temporal::DEFAULT_CLAMP_SIGMA,
+        frames: state.since_reset.clamp(1, worth),
+    })
 }
 
 fn write_uniforms(
@@ -766,6 +795,11 @@ fn write_uniforms(
     let clip_from_world = crate::render::clip_from_world(view);
     let reset = s.reset_on_change && state.generation != Some(scene.scene.generation);
     state.generation = Some(scene.scene.generation);
+    state.since_reset = if reset {
+        1
+    } else {
+        state.since_reset.saturating_add(1)
+    };
     let prev = state.prev_clip_from_world.unwrap_or(clip_from_world);
     state.prev_clip_from_world = Some(clip_from_world);
     let frame = state.frame;

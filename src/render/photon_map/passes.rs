@@ -15,6 +15,7 @@ use super::pipelines::{GRID_ENTRIES, PhotonMapPipelines, grid_dispatches};
 use super::view::{PhotonMapFrame, PhotonMapStereo, PhotonMapViewState};
 use crate::render::photon_groups;
 use crate::render::span::SpanSettle;
+use crate::render::temporal::{self, TemporalPipelines, ViewTemporal};
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::render::trace::{TraceSpecialization, wanted_features};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
@@ -81,8 +82,10 @@ pub fn photon_map_passes(
         &PhotonMapFrame,
         Option<&PhotonMapStereo>,
         Option<&crate::render::settle::ViewSettle>,
+        Option<&ViewTemporal>,
     )>,
     states: Query<&PhotonMapViewState>,
+    temporal_pipelines: Option<Res<TemporalPipelines>>,
     scene: Option<Res<TraceSceneBuffers>>,
     pipelines: Option<Res<PhotonMapPipelines>>,
     cache: Res<PipelineCache>,
@@ -91,7 +94,7 @@ pub fn photon_map_passes(
     specialization: Option<Res<TraceSpecialization>>,
     mut ctx: RenderContext,
 ) {
-    let (buffer, prepass, state, _, stereo, view_settle) = view.into_inner();
+    let (buffer, prepass, state, _, stereo, view_settle, temporal) = view.into_inner();
     let Some(pipelines) = pipelines else {
         return;
     };
@@ -222,6 +225,10 @@ pub fn photon_map_passes(
     for (name, word) in PHOTON_MAP_COUNTERS {
         let at = word * 4;
         diagnostics.record_u32(ctx.command_encoder(), &state.header.slice(at..at + 4), name);
+    }
+    // The shared temporal stage, once the gather wrote this frame's mean.
+    if let (Some(t), Some(p)) = (temporal, temporal_pipelines.as_deref()) {
+        temporal::accumulate(&mut ctx, (&cache, p, &settle), t, buffer, &log);
     }
     view_settle.inspect(|s| s.mark_ran());
 }

@@ -9,6 +9,7 @@ use bevy::render::view::ExtractedView;
 
 use crate::optics::{PHOTON_BYTES, SCAN_BLOCK, pcg_hash, progressive_radius2};
 use crate::render::ExtractedCaustics;
+use crate::render::temporal::TemporalAccumulation;
 use crate::render::trace::scene::TraceSceneBuffers;
 use crate::{CausticsTechnique, PhotonMapSettings};
 
@@ -52,6 +53,12 @@ pub struct PhotonMapKey {
     /// Grid budget, cells.
     pub budget: u32,
 }
+
+/// Frames of the shared temporal stage's history (`render::temporal`): through a change of
+/// the scene, which restarts the progressive mean, a running mean of at most this many frames
+/// where the caustic did not change; on a still view the history fades once the progressive
+/// mean holds this many frames.
+pub const HISTORY_FRAMES: u32 = 32;
 
 /// What the progressive mean is of: any change starts it again.
 #[derive(Clone, Debug, PartialEq)]
@@ -251,6 +258,9 @@ pub fn prepare_photon_map_views(
             && scene.as_ref().is_some_and(|s| s.lights > 0);
         if !active {
             e.remove::<PhotonMapFrame>();
+            if caustics.technique == CausticsTechnique::PhotonMap {
+                e.remove::<TemporalAccumulation>();
+            }
             if state.is_some() && !mine {
                 e.remove::<PhotonMapViewState>();
             }
@@ -363,6 +373,7 @@ pub fn prepare_photon_map_views(
             (r0, r2),
             flags,
         );
+        let state_frame = state.frame.max(1);
         match left {
             Some(l) => e.insert(PhotonMapStereo {
                 left: l.entity,
@@ -374,6 +385,18 @@ pub fn prepare_photon_map_views(
             e.insert(s);
         }
         e.insert(PhotonMapFrame);
+        // The shared temporal stage keeps a history through a change of the scene (which
+        // restarts the progressive mean); it fades as the new mean grows.
+        if settings.progressive {
+            e.insert(TemporalAccumulation {
+                owner: CausticsTechnique::PhotonMap,
+                max_history: HISTORY_FRAMES,
+                clamp_sigma: crate::render::temporal::DEFAULT_CLAMP_SIGMA,
+                frames: state_frame,
+            });
+        } else {
+            e.remove::<TemporalAccumulation>();
+        }
     }
 }
 

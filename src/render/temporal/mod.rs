@@ -1,0 +1,356 @@
+//! The temporal stage shared by the techniques (issue 28): a view's caustics buffer, as a
+//! technique left it this frame, blended into a per-pixel history, and the blend written back
+//! over the buffer. It knows no technique: one asks for it by putting a
+//! [`TemporalAccumulation`] on its view (its prepare system, render world) and calling
+//! [`accumulate`] at the end of its passes.
+//!
+//! A technique's estimate covers [`TemporalAccumulation::frames`] frames: 1 for one that
+//! shows each frame alone (AAPS), which then gets a running mean over at most
+//! [`TemporalAccumulation::max_history`] frames (then an exponential mean of that length);
+//! more for one that keeps its own mean (the photon map's progressive frames since it last
+//! restarted), whose prior from before its restart then fades as its own mean grows
+//! (`accumulate.wgsl` has the rule). The view's [`ViewSettle::change`] decides what the
+//! history is worth:
+//!
+//! | change since the last frame | history |
+//! | --- | --- |
+//! | none | kept whole: the new estimate differs from it by noise only |
+//! | the scene only (a light, a caster, a receiver or a material) | clamped per pixel to the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard deviations; a clamped pixel keeps at most [`CLAMPED_HISTORY`] frames |
+//! | the camera, the viewport, the settings, the buffer | dropped (no reprojection yet) |
+//!
+//! So a light that jitters or a far object that moves keeps the history where the caustic did
+//! not change, and a moved caustic leaves no ghost. A view that settles
+//! ([`crate::Caustics::settle_frames`]) keeps the output it reached.
+//!
+//! Cost: 64 bytes per pixel (two of each of the `Rgba32Float` prior and last output, read one
+//! frame and written the next), one compute dispatch reading 12 texels per pixel, and one copy
+//! of the view-sized output into the caustics buffer per frame.
+
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
+
+use bevy::prelude::*;
+use bevy::render::diagnostic::RecordDiagnostics;
+use bevy::render::render_resource::{
+    BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
+    BufferUsages, CachedComputePipelineId, ComputePassDescriptor, ComputePipelineDescriptor,
+    Extent3d, PipelineCache, ShaderStages, StorageTextureAccess, TexelCopyTextureInfo, Texture,
+    TextureDescriptor, TextureDimension, TextureFormat, TextureSampleType, TextureUsages,
+    TextureView, binding_types,
+};
+use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue};
+use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::shader::Shader;
+
+use super::settle::{SettleChange, ViewSettle};
+use super::span::SpanSettle;
+use super::{CausticsDispatchLog, ExtractedCaustics, ViewCausticsBuffer};
+use crate::CausticsTechnique;
+
+/// GPU span and dispatch-log name of the stage.
+pub const TEMPORAL_PASS: &str = "caustics/temporal";
+
+/// The default width of the history clamp, standard deviations
+/// ([`TemporalAccumulation::clamp_sigma`]).
+pub const DEFAULT_CLAMP_SIGMA: f32 = 2.0;
+
+/// History frames a pixel keeps after its history was clamped (the scene changed there).
+pub const CLAMPED_HISTORY: f32 = 4.0;
+
+/// Bytes per pixel of a view's histories.
+pub const TEMPORAL_BYTES_PER_PIXEL: u64 = 2 * (16 + 16);
+
+const FLAG_RESET: u32 = 1;
+const FLAG_CLAMP: u32 = 2;
+
+/// A technique's request for the stage on a view (render world; inserted by its prepare
+/// system each frame it runs). It holds while the view's technique is its `owner`.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct TemporalAccumulation {
+    /// The technique that asked (another technique on the view drops the history).
+    pub owner: CausticsTechnique,
+    /// Frames in the running mean, at least 1 (1: no accumulation, the buffer as drawn).
+    pub max_history: u32,
+    /// The history clamp's width on a frame in which the scene changed, in standard
+    /// deviations of the current frame's 3x3 luminance.
+    pub clamp_sigma: f32,
+    /// Frames the technique's estimate of this frame covers (at least 1; 1 for a single
+    /// frame, `n` for a mean of the last `n` frames that the technique keeps itself).
+    pub frames: u32,
+}
+
+/// A view's histories (render world).
+#[derive(Component)]
+pub struct ViewTemporal {
+    size: UVec2,
+    /// `Rgba32Float`: the prior (rgb) and its frames; two, read and written in turn.
+    prior: [(Texture, TextureView); 2],
+    /// `Rgba32Float`: the last output (rgb) and the estimate's alpha; two, in turn.
+    last: [(Texture, TextureView); 2],
+    params: Buffer,
+    /// The history read next.
+    read: AtomicUsize,
+    /// The next run drops the history (set by a change, cleared by a run).
+    reset: AtomicBool,
+    /// The next run clamps the history (the scene changed since the last run).
+    clamp: AtomicBool,
+    /// Frames of this frame's estimate (f32 bits), and of the last run's.
+    k: AtomicU32,
+    k_last: AtomicU32,
+}
+
+impl ViewTemporal {
+    /// GPU bytes held (`render::memory`).
+    pub fn gpu_bytes(&self) -> u64 {
+        self.size.x as u64 * self.size.y as u64 * TEMPORAL_BYTES_PER_PIXEL + self.params.size()
+    }
+}
+
+/// The stage's pipeline.
+#[derive(Resource)]
+pub struct TemporalPipelines {
+    layout: BindGroupLayoutDescriptor,
+    accumulate: CachedComputePipelineId,
+}
+
+#[derive(Resource)]
+struct TemporalShader(Handle<Shader>);
+
+/// Register the stage (render app); called from [`crate::render::build`].
+pub(crate) fn build(app: &mut App) {
+    let shader = app
+        .world_mut()
+        .resource_mut::<Assets<Shader>>()
+        .add(Shader::from_wgsl(
+            include_str!("accumulate.wgsl"),
+            "bevy_caustics/temporal_accumulate.wgsl",
+        ));
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app
+        .insert_resource(TemporalShader(shader))
+        .add_systems(RenderStartup, init_pipelines)
+        .add_systems(
+            Render,
+            prepare_temporal.in_set(RenderSystems::PrepareBindGroups),
+        );
+}
+
+fn init_pipelines(mut commands: Commands, cache: Res<PipelineCache>, shader: Res<TemporalShader>) {
+    use binding_types::*;
+    let float = TextureSampleType::Float { filterable: false };
+    let layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:temporal",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer_sized(false, None),
+                texture_2d(float),
+                texture_2d(float),
+                texture_2d(float),
+                texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+                texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+            ),
+        ),
+    );
+    let accumulate = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+        label: Some("caustics:pipeline:temporal_accumulate".into()),
+        layout: vec![layout.clone()],
+        shader: shader.0.clone(),
+        entry_point: Some("accumulate".into()),
+        ..default()
+    });
+    commands.insert_resource(TemporalPipelines { layout, accumulate });
+}
+
+fn history_texture(
+    device: &RenderDevice,
+    label: &'static str,
+    size: UVec2,
+    format: TextureFormat,
+) -> (Texture, TextureView) {
+    let texture = device.create_texture(&TextureDescriptor {
+        label: Some(label),
+        size: Extent3d {
+            width: size.x,
+            height: size.y,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: TextureDimension::D2,
+        format,
+        usage: TextureUsages::TEXTURE_BINDING
+            | TextureUsages::STORAGE_BINDING
+            | TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&default());
+    (texture, view)
+}
+
+impl ViewTemporal {
+    fn new(device: &RenderDevice, size: UVec2) -> Self {
+        let texture = |label| history_texture(device, label, size, TextureFormat::Rgba32Float);
+        Self {
+            size,
+            prior: [0, 1].map(|_| texture("caustics_temporal_prior")),
+            last: [0, 1].map(|_| texture("caustics_temporal_last")),
+            params: device.create_buffer(&BufferDescriptor {
+                label: Some("caustics_temporal_params"),
+                size: 32,
+                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            read: AtomicUsize::new(0),
+            reset: AtomicBool::new(true),
+            clamp: AtomicBool::new(false),
+            k: AtomicU32::new(1f32.to_bits()),
+            k_last: AtomicU32::new(1f32.to_bits()),
+        }
+    }
+}
+
+/// Create (or resize) the histories of every view that asks for the stage, note this frame's
+/// change and write the parameters; drop the histories of views that no longer ask.
+#[allow(clippy::type_complexity)]
+pub fn prepare_temporal(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    mut views: Query<(
+        Entity,
+        Option<&TemporalAccumulation>,
+        Option<&ExtractedCaustics>,
+        Option<&ViewCausticsBuffer>,
+        Option<&ViewSettle>,
+        Option<&mut ViewTemporal>,
+    )>,
+) {
+    for (entity, request, caustics, buffer, settle, temporal) in &mut views {
+        let owned = request
+            .zip(caustics)
+            .filter(|(r, c)| r.owner == c.technique)
+            .map(|(r, _)| r);
+        let (Some(request), Some(buffer)) = (owned, buffer) else {
+            if temporal.is_some() {
+                commands.entity(entity).remove::<ViewTemporal>();
+            }
+            continue;
+        };
+        let mut fresh = None;
+        let temporal = match temporal {
+            Some(t) if t.size == buffer.size => t.into_inner(),
+            _ => {
+                fresh = Some(ViewTemporal::new(&device, buffer.size));
+                fresh.as_mut().unwrap()
+            }
+        };
+        match settle.map_or(SettleChange::View, |s| s.change) {
+            SettleChange::None => {}
+            SettleChange::Scene => temporal.clamp.store(true, Ordering::Relaxed),
+            SettleChange::View => temporal.reset.store(true, Ordering::Relaxed),
+        }
+        let flags = if temporal.reset.load(Ordering::Relaxed) {
+            FLAG_RESET
+        } else if temporal.clamp.load(Ordering::Relaxed) {
+            FLAG_CLAMP
+        } else {
+            0
+        };
+        let clamp_sigma = if request.clamp_sigma.is_finite() {
+            request.clamp_sigma.max(0.0)
+        } else {
+            0.0
+        };
+        let k = request.frames.max(1) as f32;
+        temporal.k.store(k.to_bits(), Ordering::Relaxed);
+        let mut bytes = Vec::with_capacity(32);
+        for v in [buffer.size.x, buffer.size.y, flags] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [
+            k,
+            f32::from_bits(temporal.k_last.load(Ordering::Relaxed)),
+            request.max_history.max(1) as f32,
+            clamp_sigma,
+            CLAMPED_HISTORY,
+        ] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        queue.write_buffer(&temporal.params, 0, &bytes);
+        if let Some(t) = fresh {
+            commands.entity(entity).insert(t);
+        }
+    }
+}
+
+/// Combine the caustics buffer with the view's history and write the output back over it (one
+/// dispatch and one copy, span [`TEMPORAL_PASS`]). Does nothing while the pipeline compiles
+/// (the buffer then shows this frame's estimate alone).
+pub fn accumulate(
+    ctx: &mut RenderContext,
+    (cache, pipelines, span): (&PipelineCache, &TemporalPipelines, &SpanSettle),
+    temporal: &ViewTemporal,
+    buffer: &ViewCausticsBuffer,
+    log: &CausticsDispatchLog,
+) {
+    let Some(pipeline) = cache.get_compute_pipeline(pipelines.accumulate) else {
+        return;
+    };
+    if temporal.size != buffer.size {
+        return;
+    }
+    let r = temporal.read.load(Ordering::Relaxed) & 1;
+    let w = 1 - r;
+    let group = ctx.render_device().create_bind_group(
+        "caustics:bind_group:temporal",
+        &cache.get_bind_group_layout(&pipelines.layout),
+        &BindGroupEntries::sequential((
+            temporal.params.as_entire_binding(),
+            &buffer.view,
+            &temporal.prior[r].1,
+            &temporal.last[r].1,
+            &temporal.prior[w].1,
+            &temporal.last[w].1,
+        )),
+    );
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    {
+        let mut pass = ctx
+            .command_encoder()
+            .begin_compute_pass(&ComputePassDescriptor {
+                label: Some("caustics_temporal"),
+                timestamp_writes: None,
+            });
+        let s = diagnostics.pass_span(&mut pass, TEMPORAL_PASS);
+        span.settle(&mut pass);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(buffer.size.x.div_ceil(8), buffer.size.y.div_ceil(8), 1);
+        s.end(&mut pass);
+    }
+    let texture = |t| TexelCopyTextureInfo {
+        texture: t,
+        mip_level: 0,
+        origin: Default::default(),
+        aspect: Default::default(),
+    };
+    ctx.command_encoder().copy_texture_to_texture(
+        texture(&temporal.last[w].0),
+        texture(&buffer.texture),
+        Extent3d {
+            width: buffer.size.x,
+            height: buffer.size.y,
+            depth_or_array_layers: 1,
+        },
+    );
+    log.record(TEMPORAL_PASS);
+    temporal.read.store(w, Ordering::Relaxed);
+    temporal
+        .k_last
+        .store(temporal.k.load(Ordering::Relaxed), Ordering::Relaxed);
+    temporal.reset.store(false, Ordering::Relaxed);
+    temporal.clamp.store(false, Ordering::Relaxed);
+}
