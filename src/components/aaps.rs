@@ -111,10 +111,10 @@ pub struct AapsSettings {
     /// caustic did not change (`history_clamp`).
     #[reflect(@1_u32..=1024_u32)]
     pub history_frames: u32,
-    /// On a frame in which the scene changed, each pixel's history is clamped to the current
-    /// frame's 3x3 luminance mean ± this many standard deviations (a moved caustic leaves no
-    /// ghost). Default 2 (ours). Range [0, 100]; 0 keeps only the current frame's
-    /// neighbourhood mean where it changed.
+    /// On a frame in which the scene changed, a pixel's history is dropped where its luminance
+    /// lies outside the current frame's 3x3 luminance mean ± this many standard deviations (a
+    /// moved caustic leaves no ghost). Default 2 (ours). Range [0, 100]; 0 drops it wherever
+    /// it differs from that mean.
     #[reflect(@0.0_f32..=100.0_f32)]
     pub history_clamp: f32,
     /// Adapt the density every frame. Default true. `false` freezes it at the uniform

@@ -10,11 +10,11 @@
 // - an estimate that continues its own mean (k > 1) keeps the prior as it was;
 // - the output is (n_P P + k E) / (n_P + k), with n_P at most max_history - k, so a
 //   technique's own mean takes over as it grows.
-// On a frame in which the scene changed (`FLAG_CLAMP`), the prior's luminance is first clamped
-// to the estimate's 3x3 neighbourhood, mean ± gamma standard deviations (the history clamp of
-// Karis's and Salvi's TAA, on irradiance), so a moved caustic leaves no ghost while an
-// unchanged one keeps its history; a clamped pixel's prior keeps at most `clamped_history`
-// frames. On a frame in which nothing changed nothing is clamped: the estimates differ by
+// On a frame in which the scene changed (`FLAG_CLAMP`), a prior whose luminance lies outside
+// the estimate's 3x3 neighbourhood, mean ± gamma standard deviations (the window of Karis's
+// and Salvi's TAA history clamp, on irradiance), is clamped into it and keeps at most
+// `clamped_history` frames (0: dropped), so a moved caustic leaves no ghost while an unchanged
+// one keeps its history. On a frame in which nothing changed nothing is clamped: the estimates differ by
 // noise only, and the mean converges.
 
 struct TemporalParams {
