@@ -34,8 +34,7 @@ use bevy::render::render_resource::{
     BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
     BufferUsages, CachedComputePipelineId, ComputePassDescriptor, ComputePipelineDescriptor,
     Extent3d, PipelineCache, ShaderStages, StorageTextureAccess, TexelCopyTextureInfo, Texture,
-    TextureDescriptor, TextureDimension, TextureFormat, TextureSampleType, TextureUsages,
-    TextureView, binding_types,
+    TextureFormat, TextureSampleType, TextureUsages, TextureView, binding_types,
 };
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue};
 use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
@@ -170,31 +169,17 @@ fn history_texture(
     device: &RenderDevice,
     label: &'static str,
     size: UVec2,
-    format: TextureFormat,
 ) -> (Texture, TextureView) {
-    let texture = device.create_texture(&TextureDescriptor {
-        label: Some(label),
-        size: Extent3d {
-            width: size.x,
-            height: size.y,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: TextureDimension::D2,
-        format,
-        usage: TextureUsages::TEXTURE_BINDING
-            | TextureUsages::STORAGE_BINDING
-            | TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let usage =
+        TextureUsages::TEXTURE_BINDING | TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
+    let texture = super::view_texture(device, label, size, usage);
     let view = texture.create_view(&default());
     (texture, view)
 }
 
 impl ViewTemporal {
     fn new(device: &RenderDevice, size: UVec2) -> Self {
-        let texture = |label| history_texture(device, label, size, TextureFormat::Rgba32Float);
+        let texture = |label| history_texture(device, label, size);
         Self {
             size,
             prior: [0, 1].map(|_| texture("caustics_temporal_prior")),
