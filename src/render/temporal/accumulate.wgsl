@@ -10,12 +10,15 @@
 // - an estimate that continues its own mean (k > 1) keeps the prior as it was;
 // - the output is (n_P P + k E) / (n_P + k), with n_P at most max_history - k, so a
 //   technique's own mean takes over as it grows.
-// On a frame in which the scene changed (`FLAG_CLAMP`), a prior whose luminance lies outside
-// the estimate's 3x3 neighbourhood, mean ± gamma standard deviations (the window of Karis's
-// and Salvi's TAA history clamp, on irradiance), is clamped into it and keeps at most
-// `clamped_history` frames (0: dropped), so a moved caustic leaves no ghost while an unchanged
-// one keeps its history. On a frame in which nothing changed nothing is clamped: the estimates differ by
-// noise only, and the mean converges.
+// On a frame in which the scene changed, and on the max_history frames after it (`FLAG_CLAMP`),
+// a prior whose luminance lies outside the estimate's 3x3 neighbourhood, mean ± gamma standard
+// deviations (the window of Karis's and Salvi's TAA history clamp, on irradiance), is clamped
+// into it and keeps at most `clamped_history` frames (0: dropped), so a moved caustic leaves no
+// ghost while an unchanged one keeps its history. The test goes on after the change because a
+// technique that restarts its own mean judges badly on its first frames (a wide window) and
+// better as its mean grows, while the prior can weigh for max_history frames. A view in which
+// the scene has not changed for max_history frames is not tested: the estimates differ by noise
+// only, and the mean converges.
 
 struct TemporalParams {
     size: vec2<u32>,

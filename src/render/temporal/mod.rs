@@ -15,7 +15,7 @@
 //! | change since the last frame | history |
 //! | --- | --- |
 //! | none | kept whole: the new estimate differs from it by noise only |
-//! | the scene only (a light, a caster, a receiver or a material) | dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard deviations ([`CLAMPED_HISTORY`]), kept elsewhere |
+//! | the scene only (a light, a caster, a receiver or a material) | dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard deviations ([`CLAMPED_HISTORY`]), kept elsewhere; tested again on each of the next [`TemporalAccumulation::max_history`] frames |
 //! | the camera, the viewport, the settings, the buffer | dropped (no reprojection yet) |
 //!
 //! So a light that jitters or a far object that moves keeps the history where the caustic did
@@ -93,8 +93,9 @@ pub struct ViewTemporal {
     read: AtomicUsize,
     /// The next run drops the history (set by a change, cleared by a run).
     reset: AtomicBool,
-    /// The next run clamps the history (the scene changed since the last run).
-    clamp: AtomicBool,
+    /// Runs left that test the history against the estimate: [`TemporalAccumulation::
+    /// max_history`] from the last change of the scene (the frames its prior can still weigh).
+    probation: AtomicU32,
     /// Frames of this frame's estimate (f32 bits), and of the last run's.
     k: AtomicU32,
     k_last: AtomicU32,
@@ -192,7 +193,7 @@ impl ViewTemporal {
             }),
             read: AtomicUsize::new(0),
             reset: AtomicBool::new(true),
-            clamp: AtomicBool::new(false),
+            probation: AtomicU32::new(0),
             k: AtomicU32::new(1f32.to_bits()),
             k_last: AtomicU32::new(1f32.to_bits()),
         }
@@ -236,12 +237,17 @@ pub fn prepare_temporal(
         };
         match settle.map_or(SettleChange::View, |s| s.change) {
             SettleChange::None => {}
-            SettleChange::Scene => temporal.clamp.store(true, Ordering::Relaxed),
-            SettleChange::View => temporal.reset.store(true, Ordering::Relaxed),
+            SettleChange::Scene => temporal
+                .probation
+                .store(request.max_history.max(1), Ordering::Relaxed),
+            SettleChange::View => {
+                temporal.reset.store(true, Ordering::Relaxed);
+                temporal.probation.store(0, Ordering::Relaxed);
+            }
         }
         let flags = if temporal.reset.load(Ordering::Relaxed) {
             FLAG_RESET
-        } else if temporal.clamp.load(Ordering::Relaxed) {
+        } else if temporal.probation.load(Ordering::Relaxed) > 0 {
             FLAG_CLAMP
         } else {
             0
@@ -340,5 +346,8 @@ pub fn accumulate(
         .k_last
         .store(temporal.k.load(Ordering::Relaxed), Ordering::Relaxed);
     temporal.reset.store(false, Ordering::Relaxed);
-    temporal.clamp.store(false, Ordering::Relaxed);
+    let probation = temporal.probation.load(Ordering::Relaxed);
+    temporal
+        .probation
+        .store(probation.saturating_sub(1), Ordering::Relaxed);
 }
