@@ -455,7 +455,13 @@ fn drive(
                 &lights,
                 layout,
             ) {
-                Ok(()) => *phase = Phase::Tracing,
+                Ok(()) => {
+                    // The camera's first frame (a readback shows the frame it was asked in).
+                    if job.0.every_frame && job.0.technique != CausticsTechnique::Reference {
+                        readback.request();
+                    }
+                    *phase = Phase::Tracing;
+                }
                 Err(e) => fail(e, &mut exit),
             }
         }
@@ -468,7 +474,8 @@ fn drive(
             }
             if job.0.technique != CausticsTechnique::Reference {
                 log.take();
-                // The camera's first frame: with `every_frame`, read it back too.
+                // With `every_frame`, its second frame (the first was asked for as the
+                // camera spawned).
                 if job.0.every_frame {
                     readback.request();
                 }

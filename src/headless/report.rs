@@ -61,7 +61,9 @@ pub struct RenderReport {
     /// See `linear_with`.
     #[serde(skip)]
     pub linear_without: Vec<[f32; 4]>,
-    /// With `every_frame`: the caustics buffer of every measured frame, in order.
+    /// With `every_frame`: the caustics buffer of every frame of the camera, in order: the
+    /// camera's first two frames, then measured frame `n` at index `n + 2` (its state after
+    /// [`crate::headless::RenderJob::per_frame`]`(n)`), the last measured frame last.
     #[serde(skip)]
     pub frame_caustics: Vec<CausticImage>,
     /// With `every_frame`: the counter words read back with each of `frame_caustics`.

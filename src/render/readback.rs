@@ -7,12 +7,12 @@ use std::sync::{Arc, Mutex};
 
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::prelude::*;
-use bevy::render::RenderApp;
 use bevy::render::render_resource::{
     Buffer, BufferDescriptor, BufferUsages, Extent3d, MapMode, TexelCopyBufferInfo,
     TexelCopyBufferLayout, TexelCopyTextureInfo,
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
+use bevy::render::{ExtractSchedule, RenderApp};
 
 use super::CausticImage;
 use super::aaps::view::{AapsViewState, SPLAT_GUARD_SPLATS};
@@ -35,9 +35,11 @@ const TAIL_WORDS: usize = COUNTER_WORDS + GUARD_WORDS + EXTRA_WORDS;
 
 #[derive(Default)]
 struct State {
-    /// Frames asked for and not copied yet: one copy per render frame until none is left, so
-    /// no request is lost when the main world runs ahead of the render world.
+    /// Frames asked for in the main world since its last extraction.
     requested: u32,
+    /// Frames asked for and extracted, not copied yet: one copy per render frame until none is
+    /// left, so no request is lost when the main world runs ahead of the render world.
+    to_copy: u32,
     /// Copies in flight, oldest first (one per requested frame).
     pending: std::collections::VecDeque<(Buffer, UVec2, u32, Arc<AtomicBool>)>,
     /// Also copy the photon map's stored photons (tests).
@@ -72,8 +74,11 @@ pub struct CausticsSnapshot {
 pub struct CausticsReadback(Arc<Mutex<State>>);
 
 impl CausticsReadback {
-    /// Ask for the next frame's caustics buffer of the (first) caustics view (asking every
-    /// frame gives every frame's, in order).
+    /// Ask for this frame's caustics buffer of the (first) caustics view: the render of the
+    /// state this main-world frame extracts (asking every frame gives every frame's, in order).
+    /// A request waits for the extraction: with pipelined rendering the render world draws the
+    /// previous frame while the main world runs, and a request it took at once would show the
+    /// previous frame's state.
     pub fn request(&self) {
         if let Ok(mut s) = self.0.lock() {
             s.requested = s.requested.saturating_add(1);
@@ -91,7 +96,7 @@ impl CausticsReadback {
     pub fn pending(&self) -> usize {
         self.0
             .lock()
-            .map_or(0, |s| s.pending.len() + s.requested as usize)
+            .map_or(0, |s| s.pending.len() + (s.requested + s.to_copy) as usize)
     }
 
     /// The oldest snapshot not yet polled, once the GPU has delivered it.
@@ -162,10 +167,10 @@ fn copy_for_readback(
     let Ok(mut s) = readback.0.lock() else {
         return;
     };
-    if s.requested == 0 {
+    if s.to_copy == 0 {
         return;
     }
-    s.requested -= 1;
+    s.to_copy -= 1;
     let row = (buffer.size.x * 16).div_ceil(256) * 256;
     let image_bytes = row as u64 * buffer.size.y as u64;
     let photons = photon_map.filter(|_| s.photons).map(|p| &p.photons);
@@ -264,16 +269,28 @@ fn copy_for_readback(
     s.pending.push_back((staging, buffer.size, row, ready));
 }
 
+/// Extraction: the main world's requests of the frame just finished become copies of this
+/// render (the main world waits while this runs).
+fn extract_requests(readback: Res<CausticsReadback>) {
+    if let Ok(mut s) = readback.0.lock() {
+        s.to_copy = s.to_copy.saturating_add(s.requested);
+        s.requested = 0;
+    }
+}
+
 pub(super) fn build(app: &mut App) {
     let readback = CausticsReadback::default();
     app.insert_resource(readback.clone());
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };
-    render_app.insert_resource(readback).add_systems(
-        Core3d,
-        copy_for_readback
-            .in_set(Core3dSystems::MainPass)
-            .after(super::composite::composite_caustics),
-    );
+    render_app
+        .insert_resource(readback)
+        .add_systems(ExtractSchedule, extract_requests)
+        .add_systems(
+            Core3d,
+            copy_for_readback
+                .in_set(Core3dSystems::MainPass)
+                .after(super::composite::composite_caustics),
+        );
 }

@@ -50,9 +50,9 @@ fn energies(name: &str, webgpu_limits: bool, disabled_features: WgpuFeatures) ->
         ..Default::default()
     })
     .expect("render");
-    // The first readback is the camera's first frame; then one per measured frame.
+    // The first two readbacks are the camera's first two frames; measured frame n is at n + 2.
     let frames = &report.frame_caustics;
-    assert_eq!(frames.len(), (SEGMENT as usize) * CYCLE.len() + 1);
+    assert_eq!(frames.len(), (SEGMENT as usize) * CYCLE.len() + 2);
     std::array::from_fn(|k| {
         let last = (k + 1) * SEGMENT as usize;
         let prefix = format!("caustics/{}/", CYCLE[k].name());
@@ -63,7 +63,8 @@ fn energies(name: &str, webgpu_limits: bool, disabled_features: WgpuFeatures) ->
             "{name}: frame {last} ran {:?}, not {prefix}",
             report.frame_passes[last - 1]
         );
-        let image = &frames[last];
+        // The segment's last frame, `last - 1`.
+        let image = &frames[last + 1];
         assert!(image.all_finite(), "{name}: {:?} not finite", CYCLE[k]);
         let s = image.sum();
         s.x + s.y + s.z
