@@ -831,6 +831,8 @@ mod aaps;
 
 #[path = "cpu/bvh.rs"]
 mod bvh;
+#[path = "cpu/change.rs"]
+mod change;
 #[path = "cpu/energy.rs"]
 mod energy;
 #[path = "cpu/fixed_splat.rs"]

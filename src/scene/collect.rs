@@ -15,6 +15,7 @@ use bevy::pbr::{MeshMaterial3d, StandardMaterial};
 use bevy::prelude::*;
 use glam::Vec3 as GVec3;
 
+use super::change::{self, CausticReach};
 use super::{
     Blas, Instance, MaterialParams, MeshGeometry, Surface, Tlas, TraceLight, classify_material,
 };
@@ -30,6 +31,15 @@ pub struct CausticsScene {
     pub lights: Vec<(Entity, TraceLight)>,
     /// Incremented each time the scene changes.
     pub generation: u64,
+    /// Incremented when a change can change a caustic (`scene::change`): histories restart
+    /// on this one, not on [`Self::generation`].
+    pub caustic_generation: u64,
+    /// Incremented when a receiver moved, was added or removed (whether or not it is in the
+    /// caustic light's reach): pixels whose visible surface moved restart.
+    pub receiver_generation: u64,
+    /// The lights at the last change of [`Self::caustic_generation`] (light drift is measured
+    /// from them, so a slow turn restarts once it adds up).
+    pub restart_lights: Vec<(Entity, TraceLight)>,
     /// Number of specular instances (casters).
     pub casters: usize,
     /// Number of diffuse instances (receivers).
@@ -238,6 +248,7 @@ fn gather_scene(
     mut scene: ResMut<CausticsScene>,
     mut cache: Local<BlasCache>,
     mut warned: Local<HashSet<Entity>>,
+    mut reach: Local<Option<(u64, CausticReach)>>,
     mut warnings: ResMut<CausticsWarnings>,
     meshes_q: MeshQuery,
     lights_q: LightQuery,
@@ -271,6 +282,8 @@ fn gather_scene(
             let builds = (scene.blas_builds, scene.degenerate_triangles);
             *scene = CausticsScene {
                 generation: scene.generation + 1,
+                caustic_generation: scene.caustic_generation + 1,
+                receiver_generation: scene.receiver_generation,
                 blas_builds: builds.0,
                 degenerate_triangles: builds.1,
                 ..default()
@@ -367,11 +380,44 @@ fn gather_scene(
     let used: HashSet<AssetId<Mesh>> = meshes_q.iter().map(|q| q.1.0.id()).collect();
     cache.0.retain(|id, _| used.contains(id));
     scene.cached_blas = cache.0.len();
-    scene.tlas = Arc::new(Tlas::build(instances));
+    let old = std::mem::replace(&mut scene.tlas, Arc::new(Tlas::build(instances)));
     scene.lights = lights;
     scene.casters = casters;
     scene.receivers = receivers;
     scene.generation += 1;
+    count_changes(&mut scene, &old, &mut reach);
+}
+
+/// Move [`CausticsScene::caustic_generation`] and [`CausticsScene::receiver_generation`] for
+/// what changed from `old` (see `scene::change`). The caustic light's reach is traced with
+/// the old TLAS the first time a receiver moves after a caustic restart, then kept.
+fn count_changes(scene: &mut CausticsScene, old: &Tlas, reach: &mut Option<(u64, CausticReach)>) {
+    let diff = change::changed_instances(old, &scene.tlas);
+    let extent = scene
+        .tlas
+        .bounds_where(|_| true)
+        .map_or(1.0, |(lo, hi)| (hi - lo).length());
+    let mut caustic = diff.casters
+        || scene.generation == 1
+        || change::lights_drifted(&scene.restart_lights, &scene.lights, extent);
+    if !diff.receivers.is_empty() {
+        scene.receiver_generation += 1;
+        if !caustic {
+            let g = scene.caustic_generation;
+            if reach.as_ref().is_none_or(|(at, _)| *at != g) {
+                *reach = Some((g, CausticReach::trace(old, &scene.restart_lights)));
+            }
+            let r = &reach.as_ref().unwrap().1;
+            caustic = diff
+                .receivers
+                .iter()
+                .any(|b| r.share_through(*b) >= change::REACH_SHARE);
+        }
+    }
+    if caustic {
+        scene.caustic_generation += 1;
+        scene.restart_lights = scene.lights.clone();
+    }
 }
 
 /// Registers [`CausticsScene`] and its gathering system.

@@ -2,6 +2,7 @@
 //! and the CPU BVH over them (rebuilt only for meshes that changed).
 
 pub mod bvh;
+pub mod change;
 pub mod collect;
 pub mod forward;
 pub mod gpu;
