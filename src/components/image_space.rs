@@ -67,8 +67,9 @@ pub struct ImageSpaceSettings {
     /// Luminance edge-stopping `σ_l`. Default 4. Range [0.1, 1000].
     #[reflect(@0.1_f32..=1000.0_f32)]
     pub sigma_luminance: f32,
-    /// Drop the denoiser's history when the scene's caustics change (a caster, a receiver or a
-    /// light moved or changed): motion vectors are zero where a caustic moves over a still
+    /// Drop the denoiser's history when the scene's caustics can change (a caster changed, a
+    /// light drifted past its tolerance, a receiver moved in the caustic light's reach:
+    /// `scene::change`; a mover elsewhere keeps it): motion vectors are zero where a caustic moves over a still
     /// floor, so history would smear it. Default true (ours; measured in the module doc of
     /// `render::image_space`: within 7 % of the settled error 4 frames after the sun turns,
     /// where the kept history is still 3x above it after 8).

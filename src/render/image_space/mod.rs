@@ -48,8 +48,9 @@
 //!   motion vectors follow the surface, so on a floor sliding under a still glass ball they
 //!   would drag the caustic's history along with the floor. A camera-only move gives the same
 //!   history either way (measured: RMSE 520.0 lx at the same frame with either, on
-//!   `glass_sphere` with the camera orbiting), and a moved receiver changes the scene's
-//!   generation, which drops the history anyway.
+//!   `glass_sphere` with the camera orbiting), and a receiver moved in the caustic light's
+//!   reach changes the scene's caustic generation (`scene::change`), which drops the history
+//!   anyway; one moved elsewhere keeps it, and the per-pixel validity drops what it covers.
 //! - Casters are ideal specular ([`crate::CausticMaterial`] has no roughness; a
 //!   `StandardMaterial` mirror rougher than 0.2 is already a receiver), so the paper's
 //!   roughness cutoff of 0.3 never applies.

@@ -318,7 +318,7 @@ pub fn image_space_passes(
     debug_assert!(IMAGE_SPACE_COUNTERS.len() as u64 <= COUNTER_WORDS);
     // The shared temporal stage, once SVGF wrote this frame's output.
     if let (Some(t), Some(p)) = (temporal, temporal_pipelines.as_deref()) {
-        temporal::accumulate(&mut ctx, (&cache, p, &settle), t, buffer, &log);
+        temporal::accumulate(&mut ctx, (&cache, p, &settle), t, (buffer, depth), &log);
     }
     view_settle.inspect(|s| s.mark_ran());
 }

@@ -445,7 +445,8 @@ pub struct ImageSpaceViewState {
     pub steps: Buffer,
     /// Frames traced so far.
     pub frame: u32,
-    /// The scene generation of the last frame (a change resets the history).
+    /// The scene's caustic generation of the last frame (`scene::change`: a change that can
+    /// change a caustic resets the history; others keep it).
     pub generation: Option<u64>,
     /// Frames since the SVGF history was last reset (the shared temporal stage's `frames`).
     pub since_reset: u32,
@@ -793,8 +794,9 @@ fn write_uniforms(
     queue.write_buffer(&state.rsm_views, 0, &rsm_views);
     let camera = camera_space_view(view, state.key.size);
     let clip_from_world = crate::render::clip_from_world(view);
-    let reset = s.reset_on_change && state.generation != Some(scene.scene.generation);
-    state.generation = Some(scene.scene.generation);
+    let caustic = scene.scene.caustic_generation;
+    let reset = s.reset_on_change && state.generation != Some(caustic);
+    state.generation = Some(caustic);
     state.since_reset = if reset {
         1
     } else {

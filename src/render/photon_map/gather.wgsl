@@ -8,7 +8,8 @@
 @group(0) @binding(12) var<storage, read> sorted: array<Photon>;
 @group(0) @binding(13) var<storage, read> cells: array<u32>;
 // Per pixel: rgb the mean irradiance (lux) over the accumulated frames, w the distance from
-// the eye to the pixel's point, negative where the pixel shows a mirror.
+// the eye to the pixel's point, negative where the pixel shows a mirror; then, from
+// `pixel_count()` on, per pixel x the frames in its mean.
 @group(0) @binding(14) var<storage, read_write> accum: array<vec4<f32>>;
 @group(0) @binding(15) var view_depth: texture_depth_2d;
 @group(0) @binding(16) var gbuffer: texture_2d<u32>;
@@ -116,14 +117,24 @@ fn count_gather(g: GatherResult) {
 // marked by alpha -1 for the composite (src/render/composite/composite.wgsl).
 fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32, mirror: bool) {
     let idx = u32(p.y) * u32(params.view.x) + u32(p.x);
+    let count_at = pixel_count() + idx;
     let e = select(vec3(0.0), e_in, finite3(e_in));
     var mean = e;
+    var n = 1.0;
     if (params.frame.w & FLAG_ACCUMULATE) != 0u {
-        let prev = accum[idx].xyz;
-        mean = prev + (e - prev) * params.gather.x;
+        let prev = accum[idx];
+        // A receiver moved this frame (outside the caustic light's reach, or the whole mean
+        // would have restarted): a pixel whose visible surface moved starts its mean again.
+        let moved = (params.frame.w & FLAG_VALIDATE) != 0u
+            && (abs(abs(prev.w) - dist) > 0.02 * dist || (prev.w < 0.0) != mirror);
+        if !moved {
+            n = accum[count_at].x + 1.0;
+            mean = prev.xyz + (e - prev.xyz) / n;
+        }
     }
     // w: the eye distance, negative on a mirror pixel (kept for the frozen mean).
     accum[idx] = vec4(mean, select(dist, -dist, mirror));
+    accum[count_at] = vec4(n, 0.0, 0.0, 0.0);
     textureStore(out_caustics, p, vec4(mean, select(1.0, -1.0, mirror)));
 }
 
@@ -218,6 +229,7 @@ fn stereo_reuse(x: vec3<f32>) -> vec4<f32> {
 fn store_pixel(p: vec2<i32>, e: vec3<f32>, dist: f32) {
     let idx = u32(p.y) * u32(params.view.x) + u32(p.x);
     accum[idx] = vec4(e, dist);
+    accum[pixel_count() + idx] = vec4(params.gather.y, 0.0, 0.0, 0.0);
     textureStore(out_caustics, p, vec4(e, 1.0));
 }
 
@@ -279,6 +291,10 @@ fn pixel_input(gid: vec2<u32>) -> PixelInput {
         q.key = (c.z * dy + c.y) * dx + c.x;
     }
     return q;
+}
+
+fn pixel_count() -> u32 {
+    return u32(params.view.x) * u32(params.view.y);
 }
 
 fn in_view(p: vec2<i32>) -> bool {

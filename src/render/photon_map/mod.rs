@@ -21,8 +21,12 @@
 //!    3x3x3 cells as 9 row ranges, every photon within `r` whose normal agrees with the
 //!    pixel's, the normalised Epanechnikov kernel (`optics::gather_kernel`). On a still view
 //!    the frames' results are averaged while `r` shrinks as progressive photon mapping
-//!    prescribes (`optics::progressive_radius2`), so the error keeps falling; any change of the
-//!    scene, the view, the photon count or the settings starts again.
+//!    prescribes (`optics::progressive_radius2`), so the error keeps falling; a change of the
+//!    view, the photon count or the settings starts again, and so does a change of the scene
+//!    that can change a caustic (`scene::change`). A receiver moved out of the caustic light's
+//!    reach restarts only the pixels whose eye distance changed by more than 2 % (each pixel
+//!    counts its own frames in the second half of the `accum` buffer, 32 bytes per pixel in
+//!    all), and a frozen mean goes on tracing while that happens.
 //!
 //! 4. **Caustics seen in mirrors** (`mirrors`): a pixel whose camera ray first meets a mirror
 //!    follows the reflection through the BVH to the diffuse point it shows and gathers there

@@ -228,7 +228,7 @@ pub fn photon_map_passes(
     }
     // The shared temporal stage, once the gather wrote this frame's mean.
     if let (Some(t), Some(p)) = (temporal, temporal_pipelines.as_deref()) {
-        temporal::accumulate(&mut ctx, (&cache, p, &settle), t, buffer, &log);
+        temporal::accumulate(&mut ctx, (&cache, p, &settle), t, (buffer, depth), &log);
     }
     view_settle.inspect(|s| s.mark_ran());
 }

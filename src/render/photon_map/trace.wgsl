@@ -32,6 +32,7 @@ const FLAG_FROZEN: u32 = 2u;     // gather nothing: write the mean as it is
 const FLAG_SHARED: u32 = 4u;     // workgroup-shared cooperative gather (algorithm 1)
 const FLAG_MIRRORS: u32 = 8u;    // pixels on mirrors gather at their reflected point
 const FLAG_REUSE: u32 = 16u;     // this view is a right eye: reuse the left eye's gathers
+const FLAG_VALIDATE: u32 = 32u;  // a receiver moved: restart pixels whose eye distance changed
 
 @group(0) @binding(9) var<uniform> params: PmParams;
 @group(0) @binding(10) var<storage, read_write> photons: array<Photon>;

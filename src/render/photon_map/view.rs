@@ -42,6 +42,7 @@ const FLAG_FROZEN: u32 = 2;
 const FLAG_SHARED: u32 = 4;
 const FLAG_MIRRORS: u32 = 8;
 const FLAG_REUSE: u32 = 16;
+const FLAG_VALIDATE: u32 = 32;
 
 /// What decides the buffers' sizes; a change reallocates them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,10 +61,13 @@ pub struct PhotonMapKey {
 /// mean holds this many frames.
 pub const HISTORY_FRAMES: u32 = 32;
 
-/// What the progressive mean is of: any change starts it again.
+/// What the progressive mean is of: any change starts it again. The scene enters by its
+/// caustic generation (`scene::change`): a mover outside the caustic light's reach or a light
+/// jittering within tolerance keeps the mean, and a moved receiver restarts only the pixels
+/// whose visible surface moved (`FLAG_VALIDATE`).
 #[derive(Clone, Debug, PartialEq)]
 struct Accumulating {
-    generation: u64,
+    caustic_generation: u64,
     clip_from_world: [u32; 16],
     settings: PhotonMapSettings,
     per_light: u32,
@@ -93,8 +97,11 @@ pub struct PhotonMapViewState {
     pub blocks: Buffer,
     /// Each photon's cell, from the count pass.
     pub photon_cell: Buffer,
-    /// Per pixel: the running mean (rgb) and the eye distance (w).
+    /// Per pixel: the running mean (rgb) and the eye distance (w); then per pixel the frames
+    /// in its mean (x).
     pub accum: Buffer,
+    /// The scene's receiver generation of the last frame that ran.
+    receivers: u64,
     /// Photons per light this frame.
     pub per_light: u32,
     /// Lights in the table.
@@ -189,7 +196,8 @@ impl PhotonMapViewState {
                 storage,
             ),
             photon_cell: buffer("caustics:photon_map:photon_cell", cap * 4, storage),
-            accum: buffer("caustics:photon_map:accum", pixels * 16, storage),
+            accum: buffer("caustics:photon_map:accum", pixels * 32, storage),
+            receivers: 0,
             per_light: 0,
             lights: 0,
             frame: 0,
@@ -289,7 +297,7 @@ pub fn prepare_photon_map_views(
         let clip_from_world = crate::render::clip_from_world(view);
         let r0 = base_radius(&settings, scene.casters.1);
         let now = Accumulating {
-            generation: scene.generation,
+            caustic_generation: scene.caustic_generation,
             clip_from_world: clip_from_world.to_cols_array().map(f32::to_bits),
             settings: settings.clone(),
             per_light,
@@ -301,6 +309,14 @@ pub fn prepare_photon_map_views(
             state.frozen_pending = false;
             state.accumulating = Some(now);
         }
+        // A receiver moved that keeps the mean: a frozen mean goes on (the moved pixels
+        // restart and need frames), and this frame validates every pixel's surface.
+        let receivers_moved = state.receivers != scene.receiver_generation;
+        state.receivers = scene.receiver_generation;
+        if receivers_moved {
+            state.frozen_shown = false;
+            state.frozen_pending = false;
+        }
         // Whether last frame's passes ran (`render::settle`): while the pipelines compile they
         // return early, and a frame that did not run neither counts in the progressive mean
         // nor shows the frozen one.
@@ -308,7 +324,8 @@ pub fn prepare_photon_map_views(
         if state.frozen_pending && last_ran {
             state.frozen_shown = true;
         }
-        let frozen = settings.progressive && state.frame >= settings.max_frames;
+        let frozen =
+            settings.progressive && state.frame >= settings.max_frames && !receivers_moved;
         // Work follows change (`render::settle`): a frozen mean already shown, or without
         // progressive mode nothing changed for `settle_frames` frames: the caustics buffer
         // keeps it.
@@ -356,6 +373,7 @@ pub fn prepare_photon_map_views(
             (settings.shared_memory && !reuse, FLAG_SHARED),
             (settings.mirrors && scene.has_mirrors, FLAG_MIRRORS),
             (reuse, FLAG_REUSE),
+            (receivers_moved, FLAG_VALIDATE),
         ] {
             if on {
                 flags |= flag;

@@ -172,6 +172,10 @@ pub fn gpu_lights(tlas: &Tlas, lights: &[(Entity, TraceLight)]) -> Vec<(Entity, 
 pub struct TraceSceneBuffers {
     /// Generation of the scene uploaded.
     pub generation: u64,
+    /// Its `CausticsScene::caustic_generation` (histories restart on it).
+    pub caustic_generation: u64,
+    /// Its `CausticsScene::receiver_generation` (pixels whose surface moved restart).
+    pub receiver_generation: u64,
     /// Nodes (the TLAS, its prims and every BLAS behind a header), triangles with their
     /// normals, instances with their materials ([`GpuBvh::packed`]), and lights: bindings 0, 1,
     /// 2 and 8 of every tracer.
@@ -224,6 +228,8 @@ impl TraceSceneBuffers {
             .map_or(1.0, |(lo, hi)| (hi - lo).max_element());
         Some(Self {
             generation: scene.generation,
+            caustic_generation: scene.caustic_generation,
+            receiver_generation: scene.receiver_generation,
             buffers,
             lights: lights.len() as u32,
             scene_scale,

@@ -40,6 +40,8 @@ const RECORD: u64 = 64;
 pub struct VolumeScene {
     /// `CausticsScene::generation` it was built from.
     pub generation: u64,
+    /// Its `CausticsScene::caustic_generation` (image space's history restarts on it).
+    pub caustic_generation: u64,
     /// 6 `vec4` per triangle: (position, instance) and normal per corner.
     pub tris: Buffer,
     /// 3 `vec4` per instance ([`material_rows`]).
@@ -115,6 +117,7 @@ impl VolumeScene {
         };
         Self {
             generation: scene.generation,
+            caustic_generation: scene.caustic_generation,
             tris: device.create_buffer_with_data(&BufferInitDescriptor {
                 label: Some("caustics:buffer:volume_tris"),
                 contents: &bytes(&tris),
