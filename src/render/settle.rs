@@ -36,6 +36,7 @@ use crate::{
 #[derive(Clone, PartialEq)]
 struct SettleKey {
     generation: u64,
+    caustic_generation: u64,
     clip_from_world: [u32; 16],
     size: UVec2,
     technique: CausticsTechnique,
@@ -54,7 +55,12 @@ pub enum SettleChange {
     /// Nothing.
     #[default]
     None,
-    /// Only the gathered scene (a light, a caster, a receiver or a material).
+    /// Only the gathered scene, in a way that cannot change a caustic (`scene::change`: a
+    /// receiver moved out of the caustic light's reach, a light jittered within tolerance):
+    /// only pixels whose surface moved are new.
+    Surfaces,
+    /// Only the gathered scene, in a way that can change a caustic (a light, a caster, a
+    /// receiver in the caustic light's reach, a material).
     Scene,
     /// The camera, the viewport, the technique or its settings, the stereo pairing or the
     /// caustics buffer (or the view is new).
@@ -126,11 +132,13 @@ pub fn track_settle(
         Option<&mut ViewSettle>,
     )>,
 ) {
-    let generation = scene.map_or(0, |s| s.0.generation);
+    let generation = scene.as_ref().map_or(0, |s| s.0.generation);
+    let caustic_generation = scene.map_or(0, |s| s.0.caustic_generation);
     for (entity, caustics, camera, view, buffer, settle) in &mut views {
         let size = camera.physical_viewport_size.unwrap_or_default();
         let key = SettleKey {
             generation,
+            caustic_generation,
             clip_from_world: super::clip_from_world(view)
                 .to_cols_array()
                 .map(f32::to_bits),
@@ -164,10 +172,15 @@ pub fn track_settle(
                 if key.buffer != 0
                     && SettleKey {
                         generation: key.generation,
+                        caustic_generation: key.caustic_generation,
                         ..k.clone()
                     } == key =>
             {
-                SettleChange::Scene
+                if k.caustic_generation == key.caustic_generation {
+                    SettleChange::Surfaces
+                } else {
+                    SettleChange::Scene
+                }
             }
             _ => SettleChange::View,
         };

@@ -85,9 +85,9 @@ pub fn aaps_passes(
 ) {
     let (buffer, prepass, state, _, stereo, view_settle, temporal) = view.into_inner();
     // The shared temporal stage, once the technique's work is recorded.
-    let blend = |ctx: &mut RenderContext| {
+    let blend = |ctx: &mut RenderContext, depth| {
         if let (Some(t), Some(p)) = (temporal, temporal_pipelines.as_deref()) {
-            temporal::accumulate(ctx, (&cache, p, &settle), t, buffer, &log);
+            temporal::accumulate(ctx, (&cache, p, &settle), t, (buffer, depth), &log);
         }
     };
     // Fixed-point splats (no FLOAT32_BLENDABLE): the accumulator and its resolve.
@@ -176,7 +176,7 @@ pub fn aaps_passes(
             fixed.as_ref(),
             &log,
         );
-        blend(&mut ctx);
+        blend(&mut ctx, depth);
         view_settle.inspect(|s| s.mark_ran());
         return;
     }
@@ -258,7 +258,7 @@ pub fn aaps_passes(
             name,
         );
     }
-    blend(&mut ctx);
+    blend(&mut ctx, depth);
     view_settle.inspect(|s| s.mark_ran());
 }
 

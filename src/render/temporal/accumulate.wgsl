@@ -28,10 +28,12 @@ struct TemporalParams {
     max_history: f32,
     gamma: f32,
     clamped_history: f32,
+    depth_tolerance: f32,
 }
 
 const FLAG_RESET: u32 = 1u;
 const FLAG_CLAMP: u32 = 2u;
+const FLAG_SURFACES: u32 = 4u;
 
 @group(0) @binding(0) var<uniform> params: TemporalParams;
 // This frame's estimate (the caustics buffer).
@@ -41,6 +43,10 @@ const FLAG_CLAMP: u32 = 2u;
 @group(0) @binding(3) var last_in: texture_2d<f32>;
 @group(0) @binding(4) var prior_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(5) var last_out: texture_storage_2d<rgba32float, write>;
+// The view's depth this frame (reverse-Z NDC), and the depth the history belongs to.
+@group(0) @binding(6) var view_depth: texture_depth_2d;
+@group(0) @binding(7) var depth_in: texture_2d<f32>;
+@group(0) @binding(8) var depth_out: texture_storage_2d<r32float, write>;
 
 fn lum(c: vec3<f32>) -> f32 {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));
@@ -103,6 +109,16 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
         prior = clean(textureLoad(last_in, p, 0)).rgb;
         n += max(params.k_last, 1.0);
     }
+    // The scene's geometry changed (a receiver moved, even one out of the caustic light's
+    // reach): a pixel whose depth moved shows another surface, and its history is dropped.
+    let z = textureLoad(view_depth, p, 0);
+    if (params.flags & FLAG_SURFACES) != 0u {
+        let z0 = textureLoad(depth_in, p, 0).r;
+        if !(abs(z - z0) <= params.depth_tolerance * max(z, z0)) {
+            n = 0.0;
+        }
+    }
+    textureStore(depth_out, p, vec4(z, 0.0, 0.0, 0.0));
     if n > 0.0 && (params.flags & FLAG_CLAMP) != 0u {
         let ms = neighbourhood(p);
         let hl = lum(prior);

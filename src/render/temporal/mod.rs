@@ -58,11 +58,17 @@ pub const DEFAULT_CLAMP_SIGMA: f32 = 2.0;
 /// restarts its own mean has few frames to outweigh a clamped prior.
 pub const CLAMPED_HISTORY: f32 = 0.0;
 
-/// Bytes per pixel of a view's histories.
-pub const TEMPORAL_BYTES_PER_PIXEL: u64 = 2 * (16 + 16);
+/// Bytes per pixel of a view's histories: two each of the prior, the last output and the
+/// depth they belong to.
+pub const TEMPORAL_BYTES_PER_PIXEL: u64 = 2 * (16 + 16 + 4);
+
+/// A pixel whose depth changed by more than this share on a frame in which the scene's
+/// geometry changed shows another surface: its history is dropped.
+pub const SURFACE_DEPTH_TOLERANCE: f32 = 0.02;
 
 const FLAG_RESET: u32 = 1;
 const FLAG_CLAMP: u32 = 2;
+const FLAG_SURFACES: u32 = 4;
 
 /// A technique's request for the stage on a view (render world; inserted by its prepare
 /// system each frame it runs). It holds while the view's technique is its `owner`.
@@ -88,11 +94,16 @@ pub struct ViewTemporal {
     prior: [(Texture, TextureView); 2],
     /// `Rgba32Float`: the last output (rgb) and the estimate's alpha; two, in turn.
     last: [(Texture, TextureView); 2],
+    /// `R32Float`: the view's depth (reverse-Z NDC) the history belongs to; two, in turn.
+    depth: [(Texture, TextureView); 2],
     params: Buffer,
     /// The history read next.
     read: AtomicUsize,
     /// The next run drops the history (set by a change, cleared by a run).
     reset: AtomicBool,
+    /// The next run drops the history of pixels whose surface moved (set by a change of the
+    /// scene's geometry, cleared by a run).
+    surfaces: AtomicBool,
     /// Runs left that test the history against the estimate: [`TemporalAccumulation::
     /// max_history`] from the last change of the scene (the frames its prior can still weigh).
     probation: AtomicU32,
@@ -153,6 +164,9 @@ fn init_pipelines(mut commands: Commands, cache: Res<PipelineCache>, shader: Res
                 texture_2d(float),
                 texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
                 texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+                texture_depth_2d(),
+                texture_2d(float),
+                texture_storage_2d(TextureFormat::R32Float, StorageTextureAccess::WriteOnly),
             ),
         ),
     );
@@ -178,6 +192,26 @@ fn history_texture(
     (texture, view)
 }
 
+fn depth_history(device: &RenderDevice, size: UVec2) -> (Texture, TextureView) {
+    use bevy::render::render_resource::{TextureDescriptor, TextureDimension};
+    let texture = device.create_texture(&TextureDescriptor {
+        label: Some("caustics_temporal_depth"),
+        size: Extent3d {
+            width: size.x.max(1),
+            height: size.y.max(1),
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: TextureDimension::D2,
+        format: TextureFormat::R32Float,
+        usage: TextureUsages::TEXTURE_BINDING | TextureUsages::STORAGE_BINDING,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&default());
+    (texture, view)
+}
+
 impl ViewTemporal {
     fn new(device: &RenderDevice, size: UVec2) -> Self {
         let texture = |label| history_texture(device, label, size);
@@ -185,14 +219,16 @@ impl ViewTemporal {
             size,
             prior: [0, 1].map(|_| texture("caustics_temporal_prior")),
             last: [0, 1].map(|_| texture("caustics_temporal_last")),
+            depth: [0, 1].map(|_| depth_history(device, size)),
             params: device.create_buffer(&BufferDescriptor {
                 label: Some("caustics_temporal_params"),
-                size: 32,
+                size: 48,
                 usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
             read: AtomicUsize::new(0),
             reset: AtomicBool::new(true),
+            surfaces: AtomicBool::new(false),
             probation: AtomicU32::new(0),
             k: AtomicU32::new(1f32.to_bits()),
             k_last: AtomicU32::new(1f32.to_bits()),
@@ -237,9 +273,13 @@ pub fn prepare_temporal(
         };
         match settle.map_or(SettleChange::View, |s| s.change) {
             SettleChange::None => {}
-            SettleChange::Scene => temporal
-                .probation
-                .store(request.max_history.max(1), Ordering::Relaxed),
+            SettleChange::Surfaces => temporal.surfaces.store(true, Ordering::Relaxed),
+            SettleChange::Scene => {
+                temporal
+                    .probation
+                    .store(request.max_history.max(1), Ordering::Relaxed);
+                temporal.surfaces.store(true, Ordering::Relaxed);
+            }
             SettleChange::View => {
                 temporal.reset.store(true, Ordering::Relaxed);
                 temporal.probation.store(0, Ordering::Relaxed);
@@ -247,10 +287,10 @@ pub fn prepare_temporal(
         }
         let flags = if temporal.reset.load(Ordering::Relaxed) {
             FLAG_RESET
-        } else if temporal.probation.load(Ordering::Relaxed) > 0 {
-            FLAG_CLAMP
         } else {
-            0
+            let on = |b: bool, f: u32| if b { f } else { 0 };
+            on(temporal.probation.load(Ordering::Relaxed) > 0, FLAG_CLAMP)
+                | on(temporal.surfaces.load(Ordering::Relaxed), FLAG_SURFACES)
         };
         let clamp_sigma = if request.clamp_sigma.is_finite() {
             request.clamp_sigma.max(0.0)
@@ -259,7 +299,7 @@ pub fn prepare_temporal(
         };
         let k = request.frames.max(1) as f32;
         temporal.k.store(k.to_bits(), Ordering::Relaxed);
-        let mut bytes = Vec::with_capacity(32);
+        let mut bytes = Vec::with_capacity(48);
         for v in [buffer.size.x, buffer.size.y, flags] {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
@@ -269,9 +309,11 @@ pub fn prepare_temporal(
             request.max_history.max(1) as f32,
             clamp_sigma,
             CLAMPED_HISTORY,
+            SURFACE_DEPTH_TOLERANCE,
         ] {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
+        bytes.resize(48, 0);
         queue.write_buffer(&temporal.params, 0, &bytes);
         if let Some(t) = fresh {
             commands.entity(entity).insert(t);
@@ -286,7 +328,7 @@ pub fn accumulate(
     ctx: &mut RenderContext,
     (cache, pipelines, span): (&PipelineCache, &TemporalPipelines, &SpanSettle),
     temporal: &ViewTemporal,
-    buffer: &ViewCausticsBuffer,
+    (buffer, depth): (&ViewCausticsBuffer, &TextureView),
     log: &CausticsDispatchLog,
 ) {
     let Some(pipeline) = cache.get_compute_pipeline(pipelines.accumulate) else {
@@ -307,6 +349,9 @@ pub fn accumulate(
             &temporal.last[r].1,
             &temporal.prior[w].1,
             &temporal.last[w].1,
+            depth,
+            &temporal.depth[r].1,
+            &temporal.depth[w].1,
         )),
     );
     let diagnostics = ctx.diagnostic_recorder();
@@ -346,6 +391,7 @@ pub fn accumulate(
         .k_last
         .store(temporal.k.load(Ordering::Relaxed), Ordering::Relaxed);
     temporal.reset.store(false, Ordering::Relaxed);
+    temporal.surfaces.store(false, Ordering::Relaxed);
     let probation = temporal.probation.load(Ordering::Relaxed);
     temporal
         .probation
