@@ -52,14 +52,19 @@ pub fn angle_between(a: Vec3, b: Vec3) -> f32 {
     }
 }
 
+/// `x` above `tolerance`, or not a number (a non-finite input counts as a change).
+fn beyond(x: f32, tolerance: f32) -> bool {
+    x.is_nan() || x > tolerance
+}
+
 fn power_changed(a: Vec3, b: Vec3) -> bool {
     let scale = a.abs().max(b.abs()).max_element();
-    !((a - b).abs().max_element() <= LIGHT_POWER_TOLERANCE * scale)
+    beyond((a - b).abs().max_element(), LIGHT_POWER_TOLERANCE * scale)
 }
 
 /// Whether `new` differs from `old` beyond the tolerances; `extent` is the scene's size, metres.
 pub fn light_drifted(old: &TraceLight, new: &TraceLight, extent: f32) -> bool {
-    let moved = |a: Vec3, b: Vec3| !(a.distance(b) <= LIGHT_MOVE_TOLERANCE * extent);
+    let moved = |a: Vec3, b: Vec3| beyond(a.distance(b), LIGHT_MOVE_TOLERANCE * extent);
     let turned = |a: Vec3, b: Vec3| angle_between(a, b) > LIGHT_TURN_TOLERANCE;
     match (*old, *new) {
         (
@@ -101,8 +106,8 @@ pub fn light_drifted(old: &TraceLight, new: &TraceLight, extent: f32) -> bool {
             moved(p0, p1)
                 || turned(d0, d1)
                 || power_changed(f0, f1)
-                || !((i0 - i1).abs() <= LIGHT_TURN_TOLERANCE)
-                || !((o0 - o1).abs() <= LIGHT_TURN_TOLERANCE)
+                || beyond((i0 - i1).abs(), LIGHT_TURN_TOLERANCE)
+                || beyond((o0 - o1).abs(), LIGHT_TURN_TOLERANCE)
         }
         _ => true,
     }

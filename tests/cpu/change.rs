@@ -41,8 +41,16 @@ fn lights_drift_only_past_their_tolerances() {
     let base = sun(d, 1e5);
     let turn = |a: f32| sun(Quat::from_rotation_x(a) * d, 1e5);
     assert!(!change::light_drifted(&base, &turn(1e-5), 10.0));
-    assert!(!change::light_drifted(&base, &turn(0.5 * LIGHT_TURN_TOLERANCE), 10.0));
-    assert!(change::light_drifted(&base, &turn(2.0 * LIGHT_TURN_TOLERANCE), 10.0));
+    assert!(!change::light_drifted(
+        &base,
+        &turn(0.5 * LIGHT_TURN_TOLERANCE),
+        10.0
+    ));
+    assert!(change::light_drifted(
+        &base,
+        &turn(2.0 * LIGHT_TURN_TOLERANCE),
+        10.0
+    ));
     assert!(!change::light_drifted(&base, &sun(d, 1e5 * 1.0005), 10.0));
     assert!(change::light_drifted(&base, &sun(d, 1e5 * 1.01), 10.0));
     assert!(change::light_drifted(&base, &sun(d, f32::NAN), 10.0));
@@ -54,8 +62,16 @@ fn lights_drift_only_past_their_tolerances() {
         flux: Vec3::splat(800.0),
     };
     let extent = 10.0;
-    assert!(!change::light_drifted(&point(0.0), &point(0.5 * LIGHT_MOVE_TOLERANCE * extent), extent));
-    assert!(change::light_drifted(&point(0.0), &point(2.0 * LIGHT_MOVE_TOLERANCE * extent), extent));
+    assert!(!change::light_drifted(
+        &point(0.0),
+        &point(0.5 * LIGHT_MOVE_TOLERANCE * extent),
+        extent
+    ));
+    assert!(change::light_drifted(
+        &point(0.0),
+        &point(2.0 * LIGHT_MOVE_TOLERANCE * extent),
+        extent
+    ));
     assert!(change::light_drifted(&point(0.0), &base, extent));
     // By key: added, removed, drifted.
     let a = [(1u32, base)];
@@ -99,7 +115,10 @@ fn reach_holds_the_caustic_paths_and_nothing_else() {
     assert!(above > 0.03, "{above}");
     assert!(floor > 0.8, "{floor}");
     // Far away, or on the sun's side but off the ball's shadow: out of reach.
-    assert_eq!(reach.share_through(cube_at(Vec3::new(0.0, 30.0, 30.0), 0.5)), 0.0);
+    assert_eq!(
+        reach.share_through(cube_at(Vec3::new(0.0, 30.0, 30.0), 0.5)),
+        0.0
+    );
     // Degenerate inputs: no lights, no casters, an inverted box.
     let empty = CausticReach::trace::<u32>(&tlas, &[]);
     assert_eq!(empty.share_through(cube_at(Vec3::ZERO, 1.0)), 0.0);

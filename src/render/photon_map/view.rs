@@ -324,8 +324,7 @@ pub fn prepare_photon_map_views(
         if state.frozen_pending && last_ran {
             state.frozen_shown = true;
         }
-        let frozen =
-            settings.progressive && state.frame >= settings.max_frames && !receivers_moved;
+        let frozen = settings.progressive && state.frame >= settings.max_frames && !receivers_moved;
         // Work follows change (`render::settle`): a frozen mean already shown, or without
         // progressive mode nothing changed for `settle_frames` frames: the caustics buffer
         // keeps it.
