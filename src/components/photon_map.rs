@@ -41,8 +41,9 @@ pub struct PhotonMapSettings {
     /// Accumulate frames while nothing changes (progressive photon mapping in the memoryless
     /// form of Knaus and Zwicker 2011): frame `i` gathers with `r_i² = r_{i−1}² (i − 1 + α) /
     /// i` and the caustics buffer shows the mean of the frames, so the error keeps falling
-    /// towards the reference. A change of the scene, the view or these settings starts again.
-    /// Default true. `false` shows each frame's own gather at `radius`.
+    /// towards the reference. A change of the view or these settings starts again, and so does
+    /// a change of the scene that can change a caustic (`scene::change`; a receiver moved
+    /// elsewhere restarts only the pixels whose surface moved). Default true. `false` shows each frame's own gather at `radius`.
     pub progressive: bool,
     /// Progressive photon mapping's α, the share of photons kept per frame: the radius falls
     /// as `i^((α−1)/2)`. Default 0.7 (Hachisuka and Jensen). Range [0.05, 1].
