@@ -397,9 +397,8 @@ fn count_changes(scene: &mut CausticsScene, old: &Tlas, reach: &mut Option<(u64,
         .tlas
         .bounds_where(|_| true)
         .map_or(1.0, |(lo, hi)| (hi - lo).length());
-    let mut caustic = diff.casters
-        || scene.generation == 1
-        || change::lights_drifted(&scene.restart_lights, &scene.lights, extent);
+    let mut caustic =
+        diff.casters || change::lights_drifted(&scene.restart_lights, &scene.lights, extent);
     if !diff.receivers.is_empty() {
         scene.receiver_generation += 1;
         if !caustic {

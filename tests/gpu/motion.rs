@@ -36,18 +36,7 @@ fn circle_cube(world: &mut World, frame: u32) {
     let angle = 0.05 * frame as f32;
     let at = Vec3::new(2.5 * angle.cos(), 0.15, 2.5 * angle.sin() - 0.5);
     if frame == 0 {
-        let mesh = world
-            .resource_mut::<Assets<Mesh>>()
-            .add(Cuboid::new(0.3, 0.3, 0.3));
-        let material = world
-            .resource_mut::<Assets<StandardMaterial>>()
-            .add(StandardMaterial::from_color(Color::srgb(0.7, 0.7, 0.7)));
-        world.spawn((
-            Circling,
-            Mesh3d(mesh),
-            MeshMaterial3d(material),
-            Transform::from_translation(at),
-        ));
+        spawn_cube(world, Circling, at);
         return;
     }
     let mut q = world.query_filtered::<&mut Transform, With<Circling>>();
@@ -425,7 +414,8 @@ const HIDE_AT: u32 = 20;
 #[derive(Component)]
 struct Hiding;
 
-fn spawn_hiding_cube(world: &mut World, at: Vec3) {
+/// A 0.3 m grey diffuse cube at `at`, tagged with `marker`.
+fn spawn_cube(world: &mut World, marker: impl Component, at: Vec3) {
     let mesh = world
         .resource_mut::<Assets<Mesh>>()
         .add(Cuboid::new(0.3, 0.3, 0.3));
@@ -433,7 +423,7 @@ fn spawn_hiding_cube(world: &mut World, at: Vec3) {
         .resource_mut::<Assets<StandardMaterial>>()
         .add(StandardMaterial::from_color(Color::srgb(0.7, 0.7, 0.7)));
     world.spawn((
-        Hiding,
+        marker,
         Mesh3d(mesh),
         MeshMaterial3d(material),
         Transform::from_translation(at),
@@ -443,7 +433,7 @@ fn spawn_hiding_cube(world: &mut World, at: Vec3) {
 /// A diffuse cube out of view that steps in front of the caustic at [`HIDE_AT`].
 fn hiding_cube(world: &mut World, frame: u32) {
     if frame == 0 {
-        spawn_hiding_cube(world, HIDE_OUT);
+        spawn_cube(world, Hiding, HIDE_OUT);
     } else if frame == HIDE_AT {
         let mut q = world.query_filtered::<&mut Transform, With<Hiding>>();
         for mut t in q.iter_mut(world) {
@@ -455,7 +445,7 @@ fn hiding_cube(world: &mut World, frame: u32) {
 /// The same cube in front of the caustic from the first frame.
 fn hiding_cube_from_start(world: &mut World, frame: u32) {
     if frame == 0 {
-        spawn_hiding_cube(world, HIDE_IN);
+        spawn_cube(world, Hiding, HIDE_IN);
     }
 }
 
