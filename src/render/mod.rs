@@ -183,17 +183,28 @@ pub fn photon_groups(n: u32) -> [u32; 3] {
     [x, groups.div_ceil(x), 1]
 }
 
-/// A view-sized `Rgba32Float` texture (the caustics buffer, the volumes' splat target).
 /// A view's clip-from-world matrix (the extracted one, else projection × inverse view).
 pub(crate) fn clip_from_world(view: &bevy::render::view::ExtractedView) -> Mat4 {
     view.clip_from_world
         .unwrap_or_else(|| view.clip_from_view * view.world_from_view.affine().inverse())
 }
 
+/// A view-sized `Rgba32Float` texture (the caustics buffer, the volumes' splat target).
 pub(crate) fn view_texture(
     device: &RenderDevice,
     label: &'static str,
     size: UVec2,
+    usage: TextureUsages,
+) -> bevy::render::render_resource::Texture {
+    view_texture_of(device, label, size, CAUSTICS_BUFFER_FORMAT, usage)
+}
+
+/// A view-sized 2D texture of `format`.
+pub(crate) fn view_texture_of(
+    device: &RenderDevice,
+    label: &'static str,
+    size: UVec2,
+    format: bevy::render::render_resource::TextureFormat,
     usage: TextureUsages,
 ) -> bevy::render::render_resource::Texture {
     device.create_texture(&TextureDescriptor {
@@ -206,7 +217,7 @@ pub(crate) fn view_texture(
         mip_level_count: 1,
         sample_count: 1,
         dimension: TextureDimension::D2,
-        format: CAUSTICS_BUFFER_FORMAT,
+        format,
         usage,
         view_formats: &[],
     })

@@ -126,7 +126,7 @@ fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32, mirror: bool) {
         // A receiver moved this frame (outside the caustic light's reach, or the whole mean
         // would have restarted): a pixel whose visible surface moved starts its mean again.
         let moved = (params.frame.w & FLAG_VALIDATE) != 0u
-            && (abs(abs(prev.w) - dist) > 0.02 * dist || (prev.w < 0.0) != mirror);
+            && (abs(abs(prev.w) - dist) > params.gather.w * dist || (prev.w < 0.0) != mirror);
         if !moved {
             n = accum[count_at].x + 1.0;
             mean = prev.xyz + (e - prev.xyz) / n;

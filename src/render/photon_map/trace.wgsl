@@ -21,7 +21,7 @@ struct PmParams {
     view: vec4<f32>,     // width, height (px), r² of this frame (m²), normal threshold
     emit: vec4<u32>,     // photons per light, lights, max bounces, capacity
     frame: vec4<u32>,    // R2 rotation x, y, frame seed, flags (FLAG_*)
-    gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, specular-event budget of the frame, 0
+    gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, specular-event budget of the frame, surface tolerance (FLAG_VALIDATE)
     lens: vec4<f32>,     // focal lengths fx, fy (px); z 1 for a perspective camera (footprint floor)
     forward: vec4<f32>,  // the camera's forward axis (xyz)
     other_eye: vec4<f32>, // the left eye's position (xyz), for a right eye that reuses

@@ -467,7 +467,12 @@ fn write_uniforms(
         .ceil();
     f32s(
         &mut b,
-        &[1.0 / frame as f32, frame as f32, events as f32, 0.0],
+        &[
+            1.0 / frame as f32,
+            frame as f32,
+            events as f32,
+            crate::render::temporal::SURFACE_DEPTH_TOLERANCE,
+        ],
     );
     let p = view.clip_from_view;
     let perspective = p.w_axis.w == 0.0;

@@ -63,7 +63,8 @@ pub const CLAMPED_HISTORY: f32 = 0.0;
 pub const TEMPORAL_BYTES_PER_PIXEL: u64 = 2 * (16 + 16 + 4);
 
 /// A pixel whose depth changed by more than this share on a frame in which the scene's
-/// geometry changed shows another surface: its history is dropped.
+/// geometry changed shows another surface: its history is dropped (and the photon map
+/// restarts its mean there when its eye distance changed by as much).
 pub const SURFACE_DEPTH_TOLERANCE: f32 = 0.02;
 
 const FLAG_RESET: u32 = 1;
@@ -193,21 +194,14 @@ fn history_texture(
 }
 
 fn depth_history(device: &RenderDevice, size: UVec2) -> (Texture, TextureView) {
-    use bevy::render::render_resource::{TextureDescriptor, TextureDimension};
-    let texture = device.create_texture(&TextureDescriptor {
-        label: Some("caustics_temporal_depth"),
-        size: Extent3d {
-            width: size.x.max(1),
-            height: size.y.max(1),
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: TextureDimension::D2,
-        format: TextureFormat::R32Float,
-        usage: TextureUsages::TEXTURE_BINDING | TextureUsages::STORAGE_BINDING,
-        view_formats: &[],
-    });
+    let usage = TextureUsages::TEXTURE_BINDING | TextureUsages::STORAGE_BINDING;
+    let texture = super::view_texture_of(
+        device,
+        "caustics_temporal_depth",
+        size,
+        TextureFormat::R32Float,
+        usage,
+    );
     let view = texture.create_view(&default());
     (texture, view)
 }
