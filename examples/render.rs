@@ -109,7 +109,8 @@ struct Cli {
     volume: Vec<String>,
     /// ImageSpaceSettings fields, as field=value,...: rsm_resolution, luminance_cutoff,
     /// stride, hi_z, thickness, denoise, alpha_color, alpha_moments, history_cap,
-    /// atrous_iterations, sigma_depth, sigma_normal, sigma_luminance, reset_on_change
+    /// atrous_iterations, sigma_depth, sigma_normal, sigma_luminance, reset_on_change,
+    /// internal_events
     /// [default: ImageSpaceSettings::default()].
     #[arg(long = "image-space", value_name = "FIELD=VALUE,...")]
     image_space: Vec<String>,
@@ -277,6 +278,7 @@ impl Cli {
                     "sigma_normal" => a.sigma_normal = v,
                     "sigma_luminance" => a.sigma_luminance = v,
                     "reset_on_change" => a.reset_on_change = v != 0.0,
+                    "internal_events" => a.internal_events = v as u32,
                     _ => return None,
                 }
                 Some(())

@@ -39,6 +39,20 @@ pub struct ImageSpaceSettings {
     /// the tolerance of the reprojection's "plane" case. Default 0.02 (ours). Range [1e-4, 1].
     #[reflect(@1.0e-4_f32..=1.0_f32)]
     pub thickness: f32,
+    /// Reflections a photon may take inside a closed caster before it must leave (ours, past
+    /// the seed's one interface plus the exit): where it meets the glass again is found by
+    /// marching between the light's caster-front and caster-back layers, and each meeting
+    /// refracts out with probability `1 - F` or reflects (always on total internal reflection).
+    /// A photon still inside after these, or one that crosses a silhouette where the layers
+    /// cannot follow it, is dropped and counted (`caustics/image_space/trapped`); when that is
+    /// over 20 % of the photons traced the plugin names a better technique once in a `warn!`.
+    /// Default 64 (ours; the brilliant-cut IOR 2.4 gem in a closed room at 1024² maps: the
+    /// caustic energy in view within 8.7 % of the reference's, 1.7 % of the photons left
+    /// inside; 0 loses 74 %). Range [0, 256]; 0 drops every photon the exit reflects. Cost: one
+    /// light-space march per reflection, only for the photons that reflect inside (the gem's
+    /// trace pass takes 4.2x as long as with 0 on lavapipe).
+    #[reflect(@0_u32..=256_u32)]
+    pub internal_events: u32,
     /// Denoise the photon map with SVGF. Default true. `false` writes the raw photon map.
     /// Cost: one temporal pass, one variance pass and `atrous_iterations` filter passes per
     /// frame at the view's resolution.
@@ -84,6 +98,7 @@ impl Default for ImageSpaceSettings {
             stride: 1,
             hi_z: true,
             thickness: 0.02,
+            internal_events: 64,
             denoise: true,
             alpha_color: 0.2,
             alpha_moments: 0.2,
@@ -109,6 +124,7 @@ impl ImageSpaceSettings {
             stride: self.stride.clamp(1, 16),
             hi_z: self.hi_z,
             thickness: f(self.thickness, d.thickness, 1e-4, 1.0),
+            internal_events: self.internal_events.min(256),
             denoise: self.denoise,
             alpha_color: f(self.alpha_color, d.alpha_color, 0.01, 1.0),
             alpha_moments: f(self.alpha_moments, d.alpha_moments, 0.01, 1.0),

@@ -123,7 +123,8 @@ pub struct ImageSpaceCounters {
     pub misses: u64,
     /// Photons that failed the normal test.
     pub normal_rejects: u64,
-    /// Total internal reflections at a back face (dropped).
+    /// Total internal reflections inside a caster (followed, up to
+    /// `ImageSpaceSettings::internal_events` reflections per photon).
     pub tir: u64,
     /// Fixed-point words clamped (above 2^32 / 256 lux per photon, or non-finite).
     pub clamped: u64,
@@ -131,6 +132,10 @@ pub struct ImageSpaceCounters {
     pub nan_guards: u64,
     /// Photons that landed on a receiver inside a medium.
     pub landed_inside: u64,
+    /// Photons inside a caster that were not followed out: still reflecting after
+    /// `internal_events` reflections, or crossing a silhouette (or another caster's layers)
+    /// where the light's caster layers cannot tell where they meet the glass.
+    pub trapped: u64,
 }
 
 impl ImageSpaceCounters {
@@ -154,6 +159,7 @@ impl ImageSpaceCounters {
             nan_guards: c(13),
             landed_inside: c(14),
             direct_hits: c(15),
+            trapped: c(16),
         }
     }
 }
@@ -305,17 +311,18 @@ pub(super) fn decode_photons(bytes: &[u8], n: usize) -> Vec<crate::optics::Store
 
 impl ImageSpaceCounters {
     /// What image space could not follow in this frame, as one line, or `None` when nothing was
-    /// lost: its seed follows one interface of a caster seen from the light plus the exit, so
-    /// a photon totally reflected at the exit is dropped, and one that leaves the light's or
-    /// the camera's view (or finds no surface in the camera's depth) is lost.
+    /// lost: a photon still inside a caster after `internal_events` reflections, or crossing a
+    /// silhouette where the light's caster layers cannot follow it, is dropped, and one that
+    /// leaves the light's or the camera's view (or finds no surface in the camera's depth) is
+    /// lost.
     pub fn lost_summary(&self) -> Option<String> {
-        let lost = self.tir + self.misses;
+        let lost = self.trapped + self.misses;
         (lost > 0 && self.photons_emitted > 0).then(|| {
             format!(
-                "bevy_caustics: image space lost {lost} of {} photons ({:.1} %): {} totally reflected at a caster's exit (it follows one interface plus the exit), {} off screen or without a surface in the camera's depth",
+                "bevy_caustics: image space lost {lost} of {} photons ({:.1} %): {} inside a caster not followed out (past internal_events reflections, or across a silhouette), {} off screen or without a surface in the camera's depth",
                 self.photons_emitted,
                 100.0 * lost as f64 / self.photons_emitted as f64,
-                self.tir,
+                self.trapped,
                 self.misses
             )
         })

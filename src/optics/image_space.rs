@@ -1,7 +1,8 @@
 //! The image-space photon tracer's optics (seed 003, cascaded image-space photon tracing):
 //! the low-discrepancy sample points over a reflective shadow map, the exact termination of a
-//! depth-buffer march (eq. 2), the three reprojection cases, the light cone of a point light,
-//! the fixed-point photon-map encoding and SVGF's edge-stopping weight. The WGSL twins are in
+//! depth-buffer march (eq. 2), the three reprojection cases, where a photon inside a caster
+//! meets its layers, the light cone of a point light, the fixed-point photon-map encoding and
+//! SVGF's edge-stopping weight. The WGSL twins are in
 //! src/render/optics.wgsl (`optics_is_*`), tested against these in tests/gpu/twins.rs.
 
 use glam::{Vec2, Vec3};
@@ -76,6 +77,44 @@ pub fn classify_reprojection(z_ray: f32, z_scene: f32, thickness: f32) -> Reproj
         Reprojection::Concave
     } else {
         Reprojection::Convex
+    }
+}
+
+/// Where a photon inside a closed caster stands against the light's two caster layers at one
+/// texel (ours, past seed 003's one interface plus the exit; issue 29): inside while its view
+/// depth along the light lies between the caster-front layer (`z_front`, the surface nearest
+/// the light) and the caster-back layer (`z_back`, the nearest surface facing away). A closed
+/// convex caster's every boundary point is in one of the two, so a photon reflected inside it
+/// leaves the interval exactly where it meets the glass again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InsideLayers {
+    /// Between the layers: still in the medium.
+    Inside = 0,
+    /// At or past the caster-back layer: meets a surface facing away from the light.
+    Back = 1,
+    /// At or before the caster-front layer: meets a surface facing the light.
+    Front = 2,
+    /// The front layer is empty (depth `<= 0`) or a depth is not finite: the photon crossed
+    /// the caster's silhouette, where the layers cannot tell where it met the glass.
+    Lost = 3,
+}
+
+/// Classify view depth `z_ray` between layer depths `z_front` and `z_back` (`<= 0`: empty).
+/// An empty back layer under a front one is an open medium (a water surface without a
+/// bottom): inside below the front. A front layer behind the back one (crossed layers of two
+/// casters) is lost as well.
+#[inline]
+pub fn inside_layers(z_ray: f32, z_front: f32, z_back: f32) -> InsideLayers {
+    let finite = z_ray.is_finite() && z_front.is_finite() && z_back.is_finite();
+    let back = z_back > 0.0;
+    if !finite || z_front <= 0.0 || (back && z_front > z_back) {
+        InsideLayers::Lost
+    } else if back && z_ray >= z_back {
+        InsideLayers::Back
+    } else if z_ray <= z_front {
+        InsideLayers::Front
+    } else {
+        InsideLayers::Inside
     }
 }
 

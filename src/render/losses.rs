@@ -1,7 +1,8 @@
 //! What a technique could not follow, named once in a `warn!` (issue 32): each technique
 //! registers the counters that count lost light (paths at the bounce cap or the event budget,
-//! photons image space cannot follow past an exit), and the first frame one of them is above
-//! zero the plugin says so, once per counter, with what to change. The counters reach the main
+//! photons image space cannot follow out of a caster), and the first frame one of them is
+//! above zero (or above its share of another counter) the plugin says so, once per counter,
+//! with what to change. The counters reach the main
 //! world through Bevy's render diagnostics, so the warnings need `RenderDiagnosticsPlugin`
 //! (the inspector and the headless renderer add it); without it nothing is read back.
 
@@ -17,6 +18,9 @@ pub struct LossCounter {
     pub path: &'static str,
     /// What was lost and what to change, after the count ("paths stopped by ...").
     pub what: &'static str,
+    /// Warn only when the count exceeds this share of another counter's value in the same
+    /// frame (its diagnostic path, the share); `None`: any count above zero.
+    pub share_of: Option<(&'static str, f64)>,
 }
 
 /// The registered loss counters, and the warnings logged so far (in order, the log's text).
@@ -52,12 +56,23 @@ fn warn_losses(
         if warned.contains(c.path) {
             continue;
         }
-        let value = store
-            .get(&DiagnosticPath::new(c.path))
-            .and_then(|d| d.value())
-            .unwrap_or(0.0);
-        if value > 0.0 {
-            let msg = format!("bevy_caustics: {value:.0} {}", c.what);
+        let value_of = |path: &'static str| {
+            store
+                .get(&DiagnosticPath::new(path))
+                .and_then(|d| d.value())
+                .unwrap_or(0.0)
+        };
+        let value = value_of(c.path);
+        let bound = c.share_of.map_or(0.0, |(of, share)| share * value_of(of));
+        if value > bound.max(0.0) {
+            let msg = match c.share_of {
+                None => format!("bevy_caustics: {value:.0} {}", c.what),
+                Some((of, _)) => format!(
+                    "bevy_caustics: {value:.0} of {:.0} {}",
+                    value_of(of),
+                    c.what
+                ),
+            };
             warn!("{msg}");
             losses.messages.push(msg);
             warned.insert(c.path);

@@ -375,6 +375,20 @@ fn optics_classify_reprojection(z_ray: f32, z_scene: f32, thickness: f32) -> u32
     return select(2u, 1u, z_ray < z_scene);
 }
 
+// inside_layers (src/optics/image_space.rs): 0 inside, 1 back, 2 front, 3 lost.
+fn optics_inside_layers(z_ray: f32, z_front: f32, z_back: f32) -> u32 {
+    let z = vec3(z_ray, z_front, z_back);
+    let finite = all(z == z) && all(abs(z) <= vec3(3.4e38));
+    let back = z_back > 0.0;
+    if !finite || z_front <= 0.0 || (back && z_front > z_back) {
+        return 3u;
+    }
+    if back && z_ray >= z_back {
+        return 1u;
+    }
+    return select(0u, 2u, z_ray <= z_front);
+}
+
 // photon_flux_scale (src/optics/image_space.rs).
 fn optics_photon_flux_scale(texels: f32, samples: f32) -> f32 {
     if samples >= 1.0 && abs(texels) <= 3.4e38 && samples <= 3.4e38 {

@@ -44,6 +44,30 @@ fn reprojection_cases() {
     assert_eq!(classify_reprojection(10.0, 10.0, -1.0), Reprojection::Plane);
 }
 
+/// A photon inside a caster against the light's two layers: inside between them, back at or
+/// past the back, front at or before the front; an empty back is an open medium; an empty
+/// front, crossed layers or a non-finite depth are lost.
+#[test]
+fn inside_layers_cases() {
+    use InsideLayers::*;
+    assert_eq!(inside_layers(2.0, 1.0, 3.0), Inside);
+    assert_eq!(inside_layers(3.0, 1.0, 3.0), Back);
+    assert_eq!(inside_layers(1e30, 1.0, 3.0), Back);
+    assert_eq!(inside_layers(1.0, 1.0, 3.0), Front);
+    assert_eq!(inside_layers(-5.0, 1.0, 3.0), Front);
+    // A caster one float thick: the ray is at one of its layers.
+    assert_eq!(inside_layers(1.0, 1.0, 1.0), Back);
+    // Open medium (no back layer): inside below the front, whatever the depth.
+    assert_eq!(inside_layers(1e30, 1.0, 0.0), Inside);
+    assert_eq!(inside_layers(0.5, 1.0, -1.0), Front);
+    // Lost: no front, crossed layers, non-finite depths.
+    assert_eq!(inside_layers(2.0, 0.0, 3.0), Lost);
+    assert_eq!(inside_layers(2.0, 4.0, 3.0), Lost);
+    assert_eq!(inside_layers(f32::NAN, 1.0, 3.0), Lost);
+    assert_eq!(inside_layers(2.0, 1.0, f32::INFINITY), Lost);
+    assert_eq!(inside_layers(f32::INFINITY, 1.0, 3.0), Lost);
+}
+
 /// R2 points fill the square evenly: every cell of a 16x16 grid gets 4 ± 2 of 1024 points,
 /// for any rotation, and points past 2^24 stay distinct.
 #[test]

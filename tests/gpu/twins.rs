@@ -710,10 +710,10 @@ fn vol_test(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 /// The WGSL twins of the image-space optics (`optics_r2_point`, `optics_march_crossing`,
-/// `optics_classify_reprojection`, `optics_fixed_point_word`, `optics_svgf_weight`,
-/// `optics_pixel_footprint_area`) against the Rust functions on 4096 inputs with extremes
-/// (parallel segments, zero and non-finite depths, huge irradiance): R2 points, cases and
-/// words exactly, the rest to 1e-5 relative.
+/// `optics_classify_reprojection`, `optics_inside_layers`, `optics_fixed_point_word`,
+/// `optics_svgf_weight`, `optics_pixel_footprint_area`) against the Rust functions on 4096
+/// inputs with extremes (parallel segments, zero, empty, equal and non-finite depths, huge
+/// irradiance): R2 points, cases and words exactly, the rest to 1e-5 relative.
 #[test]
 fn wgsl_image_space_optics_match_rust() {
     use bevy_caustics::optics::*;
@@ -732,7 +732,7 @@ fn is_test(@builtin(global_invocation_id) id: vec3<u32>) {
     let b = inputs[2u * i + 1u];
     let r2 = optics_r2_point(i * 7919u, vec2(bitcast<u32>(b.z), bitcast<u32>(b.w)));
     let w = optics_fixed_point_word(a.x * 1000.0, 256.0, b.x);
-    outputs[2u * i] = vec4(r2, optics_march_crossing(a.x, a.y, a.z, a.w), f32(optics_classify_reprojection(a.x, a.z, b.y)));
+    outputs[2u * i] = vec4(r2, optics_march_crossing(a.x, a.y, a.z, a.w), f32(optics_classify_reprojection(a.x, a.z, b.y) + 4u * optics_inside_layers(a.x, a.z - 10.0, a.w)));
     outputs[2u * i + 1u] = vec4(bitcast<f32>(w.x), f32(w.y), optics_svgf_weight(a.x - a.z, b.y, b.x, 128.0, a.y - a.w, b.y * 10.0), optics_pixel_footprint_area(a.y, b.x, b.y, vec2(a.z, a.w)));
 }
 "#;
@@ -750,6 +750,8 @@ fn is_test(@builtin(global_invocation_id) id: vec3<u32>) {
             2 => a = [1.0, 1.0, f32::INFINITY, 1.0],
             3 => a = [5.0e9, 1.0, 1.0, 1.0], // a clamped word
             4 => b[1] = 0.0,                 // zero thickness
+            5 => a = [3.0, 13.0, 13.0, 3.0], // on both layers
+            6 => a = [4.0, 1.0, 10.0, 0.0],  // an empty back layer
             _ => {}
         }
         // NaN payloads are not preserved by every GPU path: keep the rotation words finite.
@@ -772,7 +774,9 @@ fn is_test(@builtin(global_invocation_id) id: vec3<u32>) {
         let u = march_crossing(a[0], a[1], a[2], a[3]);
         assert!(close(f(e + 2), u), "crossing {a:?}: {} vs {u}", f(e + 2));
         let case = classify_reprojection(a[0], a[2], b[1]) as u32;
-        assert_eq!(f(e + 3) as u32, case, "classify {a:?} {b:?}");
+        assert_eq!(f(e + 3) as u32 % 4, case, "classify {a:?} {b:?}");
+        let inside = inside_layers(a[0], a[2] - 10.0, a[3]) as u32;
+        assert_eq!(f(e + 3) as u32 / 4, inside, "inside {a:?}");
         let (w, clamped) = fixed_point_word(a[0] * 1000.0, FIXED_POINT_SCALE, b[0]);
         assert_eq!(f(e + 4).to_bits(), w, "word {}", a[0] * 1000.0);
         assert_eq!(f(e + 5) as u32 == 1, clamped, "clamped {}", a[0] * 1000.0);

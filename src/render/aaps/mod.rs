@@ -63,10 +63,12 @@ pub(crate) fn build(app: &mut App) -> bool {
             super::losses::LossCounter {
                 path: "render/caustics/aaps/budget_stopped",
                 what: "AAPS paths stopped in a frame by the per-frame event budget (AapsSettings::bounce_budget): their light is missing from the caustic; raise the budget or lower the photon count",
+                share_of: None,
             },
             super::losses::LossCounter {
                 path: "render/caustics/aaps/max_depth",
                 what: "AAPS paths ended in a frame at AapsSettings::max_bounces specular events (their flux is counted as lost)",
+                share_of: None,
             },
         ],
     );

@@ -83,8 +83,9 @@ pub(crate) fn build(app: &mut App) {
     super::losses::register(
         app,
         &[super::losses::LossCounter {
-            path: "render/caustics/image_space/tir",
-            what: "image-space photons in a frame were totally reflected inside a caster and dropped: image space follows one interface and the exit; Aaps or PhotonMap follow light that reflects inside glass",
+            path: "render/caustics/image_space/trapped",
+            what: "image-space photons in a frame were dropped inside a caster (still reflecting after ImageSpaceSettings::internal_events, or crossing a silhouette the light's caster layers cannot follow): over 20 % of the light is lost; Aaps or PhotonMap follow light that reflects inside glass to the end",
+            share_of: Some(("render/caustics/image_space/emitted", 0.2)),
         }],
     );
     let shaders = {

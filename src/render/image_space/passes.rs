@@ -58,7 +58,7 @@ pub const ALL_PASSES: [&str; 9] = [
 
 /// Counters read into diagnostics (`render/caustics/image_space/<name>`), by word (`C_*` in
 /// trace.wgsl).
-pub const IMAGE_SPACE_COUNTERS: [(&str, u64); 16] = [
+pub const IMAGE_SPACE_COUNTERS: [(&str, u64); 17] = [
     ("caustics/image_space/emitted", 0),
     ("caustics/image_space/empty", 1),
     ("caustics/image_space/dim", 2),
@@ -75,6 +75,7 @@ pub const IMAGE_SPACE_COUNTERS: [(&str, u64); 16] = [
     ("caustics/image_space/nan_guards", 13),
     ("caustics/image_space/inside", 14),
     ("caustics/image_space/direct", 15),
+    ("caustics/image_space/trapped", 16),
 ];
 
 /// The textures of one compute pass: four sampled inputs, three storage outputs.

@@ -7,7 +7,8 @@
 // - `fs_front`: the nearest caster surface facing the light (where photons start), a thin
 //   wall's either face;
 // - `fs_back`: the nearest caster surface facing away from the light (where a photon
-//   refracted into a closed object leaves it; the paper stops at one interface).
+//   refracted into a closed object leaves it or reflects back inside; the paper stops at one
+//   interface).
 // Concatenated after optics.wgsl by src/render/image_space/pipelines.rs.
 
 struct RsmView {

@@ -838,7 +838,15 @@ fn write_uniforms(
             s.sigma_depth,
         ],
     );
-    push(&mut b, &[s.sigma_normal, s.sigma_luminance, 0.0, 0.0]);
+    push(
+        &mut b,
+        &[
+            s.sigma_normal,
+            s.sigma_luminance,
+            s.internal_events as f32,
+            0.0,
+        ],
+    );
     let h = state.hiz_layout;
     let words = [h.camera.0, h.rsm.0, h.plane_words, h.rsm_base]
         .into_iter()

@@ -112,10 +112,12 @@ pub(crate) fn build(app: &mut App) {
             super::losses::LossCounter {
                 path: "render/caustics/photon_map/budget_stopped",
                 what: "photon-map paths stopped in a frame by the per-frame event budget (PhotonMapSettings::bounce_budget): their light is missing from the caustic; raise the budget or lower the photon count",
+                share_of: None,
             },
             super::losses::LossCounter {
                 path: "render/caustics/photon_map/max_depth",
                 what: "photon-map paths ended in a frame at PhotonMapSettings::max_bounces specular events (their flux is counted as lost)",
+                share_of: None,
             },
         ],
     );
