@@ -17,7 +17,7 @@
 #   TECH_EV100=13  REFERENCE_PHOTONS=4194304  TECHNIQUES="aaps image_space photon_map volume reference"
 #   ASSETS=1 (0: leave the sample-model pictures)  ASSET_DIR=shared/khronos (else ../shared/khronos)
 #   ASSET_PHOTONS=1048576  ASSET_MODELS="AttenuationTest TransmissionRoughnessTest SunglassesKhronos
-#   DispersionTest GlassTable"
+#   DispersionTest GlassTable" (each <Model>/<Model>.glb, or .gltf with its files beside it)
 #
 # A picture over MAX_BYTES (500 KB) is re-encoded to 256 colours (pngquant or Pillow).
 set -euo pipefail
@@ -112,7 +112,9 @@ if [[ $ASSETS == 1 ]]; then
   for model in $ASSET_MODELS; do
     t=$(date +%s)
     echo "== $model on the stage, aaps, ${TECH_WIDTH}x${TECH_HEIGHT}, $TECH_FRAMES frames"
-    cargo run --release --example render -- "$ASSET_DIR/$model/$model.glb" --stage \
+    file="$ASSET_DIR/$model/$model.glb"
+    [[ -f $file ]] || file="$ASSET_DIR/$model/$model.gltf"
+    cargo run --release --example render -- "$file" --stage \
       --technique aaps --width "$TECH_WIDTH" --height "$TECH_HEIGHT" --frames "$TECH_FRAMES" \
       --photons "$ASSET_PHOTONS" --out-png "$work/asset-$model.png" --json "$work/asset-$model.json"
     cp "$work/asset-$model.png" "$OUT/asset-$model.png"

@@ -57,8 +57,13 @@ pub struct ImageSpaceSettings {
     /// Cost: one temporal pass, one variance pass and `atrous_iterations` filter passes per
     /// frame at the view's resolution.
     pub denoise: bool,
-    /// SVGF's colour blend factor: the weight of the new frame in the temporal average.
-    /// Default 0.2 (the SVGF paper). Range [0.01, 1].
+    /// SVGF's colour blend factor: the weight of the new frame in the temporal average while
+    /// the camera moves and for the `(2 - a) / a` frames after a reset. Default 0.2 (the SVGF
+    /// paper). Range [0.01, 1]. Once the camera and the caustics have stood longer, the average
+    /// is the plain mean of up to `history_cap` unfiltered frames (ours: the caustics reset the
+    /// history when they change, so an unchanged caustic under a still camera has no reason to
+    /// keep alpha's noise; with a cube circling elsewhere the caustic's frame-to-frame change
+    /// fell from 0.0165 to 0.0050 and its RMSE from 172 to 138 lx on `glass_sphere`).
     #[reflect(@0.01_f32..=1.0_f32)]
     pub alpha_color: f32,
     /// SVGF's blend factor of the luminance moments. Default 0.2. Range [0.01, 1].

@@ -7,7 +7,8 @@
 //! The models are public data, not this repository's, and are never committed here: they live in
 //! the steering repository's `shared/khronos/<Model>/<Model>.glb` (with each model's licence),
 //! found as `shared/` in the checkout, `../shared/` beside it (CI), or the folder named by
-//! `BEVY_CAUSTICS_SAMPLE_ASSETS`. Where none of those holds them the test says so on stdout and
+//! `BEVY_CAUSTICS_SAMPLE_ASSETS` (`.glb`, or `.gltf` with its files beside it;
+//! `BEVY_CAUSTICS_SAMPLE_LIST=A,B,...` names other models there). Where none of those holds them the test says so on stdout and
 //! checks nothing (it cannot fetch them: the tests run offline); with
 //! `BEVY_CAUSTICS_SAMPLE_ASSETS` set it fails instead. The README lists them with their authors
 //! and licences.
@@ -49,6 +50,25 @@ const BALANCE_TOLERANCE: f64 = 1e-4;
 const W: u32 = 48;
 const H: u32 = 36;
 
+/// The models under test: [`SAMPLE_ASSETS`], or the comma-separated folder names in
+/// `BEVY_CAUSTICS_SAMPLE_LIST` (other public models a developer has at hand).
+fn sample_list() -> Vec<String> {
+    match std::env::var("BEVY_CAUSTICS_SAMPLE_LIST") {
+        Ok(list) => list.split(',').map(|s| s.trim().to_string()).collect(),
+        Err(_) => SAMPLE_ASSETS.map(String::from).to_vec(),
+    }
+}
+
+/// `<dir>/<name>/<name>.glb`, or `.gltf` where there is no `.glb`.
+fn model_path(dir: &Path, name: &str) -> PathBuf {
+    let glb = dir.join(name).join(format!("{name}.glb"));
+    if glb.is_file() {
+        glb
+    } else {
+        dir.join(name).join(format!("{name}.gltf"))
+    }
+}
+
 /// Where the sample models are, or `Err` naming where they were looked for.
 pub fn sample_assets_dir() -> Result<PathBuf, String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -59,7 +79,7 @@ pub fn sample_assets_dir() -> Result<PathBuf, String> {
         .collect();
     candidates
         .iter()
-        .find(|d| d.join(SAMPLE_ASSETS[0]).is_dir())
+        .find(|d| d.join(&sample_list()[0]).is_dir())
         .cloned()
         .ok_or_else(|| {
             format!(
@@ -108,8 +128,8 @@ fn sample_assets_render_with_every_technique() {
     };
     let t_all = Instant::now();
     let mut failures = Vec::new();
-    for name in SAMPLE_ASSETS {
-        let path = dir.join(name).join(format!("{name}.glb"));
+    for name in sample_list() {
+        let path = model_path(&dir, &name);
         for technique in [
             CausticsTechnique::Aaps,
             CausticsTechnique::PhotonMap,

@@ -310,7 +310,8 @@ fn image_space_dispatches_nothing_without_work() {
     }
 }
 
-/// Light that reflects inside glass (issue 29 item 2), at the default 1024² maps:
+/// Light that reflects inside glass (issue 29 item 2), at the default 1024² maps, the raw
+/// photon map of the fourth frame:
 /// - the brilliant in the closed gem room (IOR 2.4: most light entering the crown is totally
 ///   reflected by the pavilion, many paths take dozens of reflections): the caustic energy in
 ///   view within 10 % of the CPU reference's, which holds the room's closed form to 1 %
@@ -333,10 +334,12 @@ fn image_space_follows_light_inside_glass() {
         scenes::gltf::write_gltf(desc, &dir).unwrap();
         image_space(RenderJob {
             scene: dir.join(format!("{}.gltf", desc.name)),
-            frames: 8,
+            frames: 4,
+            // The trace's own light: SVGF is held to its energy by the other tests.
             image_space: ImageSpaceSettings {
                 internal_events,
                 rsm_resolution,
+                denoise: false,
                 ..Default::default()
             },
             ..Default::default()
@@ -378,7 +381,7 @@ fn image_space_follows_light_inside_glass() {
     let img = report.caustics.as_ref().unwrap();
     let (_, _, cam) = slab.to_trace(128, 128);
     let under = |p: glam::Vec3| p.x.abs() < 0.4 && p.z.abs() < 0.4;
-    let (mean, px) = plane_region_mean(img, &cam, glam::Vec3::Y, 0.0, &under);
+    let (mean, px) = plane_region_mean(img, &cam, glam::Vec3::Y, 0.0, under);
     let expect = bevy_caustics::optics::luminance(closed::absorbing_slab_power());
     let err = mean / expect - 1.0;
     println!(

@@ -117,8 +117,9 @@ fn measure(
 /// the still RMSE (image space was 2.65x when any change reset its SVGF history). The photon
 /// map's flicker under motion is at most 1.05x its flicker still: motion adds none (both are
 /// above the 0.01 at frames 17 to 24, where its progressive mean still converges).
-/// Image space's flicker is printed, not checked: still, it settles at frame 16 and stops;
-/// moving, its SVGF mean (`alpha_color` 0.2) keeps its steady-state change.
+/// Image space's flicker under motion is at most 0.01: with the camera standing its SVGF
+/// history is the plain mean of the unfiltered frames (it was 0.0145 with `alpha_color` 0.2's
+/// steady state).
 #[test]
 fn caustics_hold_up_while_the_scene_moves() {
     let _g = GPU.slot();
@@ -157,6 +158,9 @@ fn caustics_hold_up_while_the_scene_moves() {
                     m.1 <= 1.05 * still.1,
                     "photon map, {what}: flicker {m:?} vs {still:?}"
                 );
+            }
+            if technique == T::ImageSpace {
+                assert!(m.1 <= 0.01, "image space, {what}: flicker {}", m.1);
             }
         }
         if technique != T::Aaps {

@@ -363,7 +363,7 @@ fn svgf_passes(
     let target =
         |k: u32, i: usize| -> &TextureView { if k == n { &buffer.view } else { &s.filter[i].1 } };
     let history = |k: u32| -> &TextureView {
-        if (n == 0 && k == 0) || (n > 0 && k == 1) {
+        if k == super::view::history_step(n, s.still_view) {
             &s.history[cur].1
         } else {
             &d_out[1]

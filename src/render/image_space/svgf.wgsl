@@ -1,7 +1,8 @@
 // SVGF (Schied et al. 2017) over the photon map, as section 3.3 of seed 003 uses it:
 // `temporal` reprojects last frame's history with the camera's previous clip_from_world (a
 // 2x2 bilinear tap, each tap tested for depth and normal; none valid is a disocclusion),
-// blends colour and luminance moments with max(alpha, 1 / history); `variance` turns the
+// blends colour and luminance moments with max(alpha, 1 / history) (colour: 1 / history alone
+// once the view and its caustics stand, FLAG_STILL_VIEW); `variance` turns the
 // moments into a variance (a 7x7 bilateral estimate while the history is under 4 frames);
 // `atrous_prep` + `atrous` are one 5x5 B3 à-trous iteration with depth, normal and luminance
 // edge stopping (optics_svgf_weight) on a 3x3-prefiltered variance, with symmetric weights
@@ -79,7 +80,13 @@ fn temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     h = min(h + 1.0, params.svgf.z);
-    let a = max(params.svgf.x, 1.0 / h);
+    // While the camera moves, the colour blend keeps its floor alpha (a reprojected history
+    // blurs a little every frame); once the view and the caustics stand (a caustic change
+    // resets the history) the history is the plain mean of up to `history_cap` unfiltered
+    // frames, so something moving elsewhere does not keep the caustic flickering at alpha's
+    // noise.
+    let still = (params.frame.w & FLAG_STILL_VIEW) != 0u;
+    let a = max(select(params.svgf.x, 0.0, still), 1.0 / h);
     let am = max(params.svgf.y, 1.0 / h);
     let l = lum(raw);
     let col = mix(hist, raw, a);

@@ -41,6 +41,7 @@ const FLAG_RESET: u32 = 2u;
 const FLAG_HISTORY: u32 = 4u;   // the pass writes the colour history (step uniform)
 const FLAG_LAST: u32 = 8u;      // the pass writes the caustics buffer (step uniform)
 const FLAG_HIZ: u32 = 16u;      // the marches use the nearest-depth pyramids
+const FLAG_STILL_VIEW: u32 = 32u; // the camera did not move: SVGF's colour mean has no floor
 
 @group(0) @binding(0) var<uniform> params: IsParams;
 @group(0) @binding(1) var<uniform> light: IsLight;

@@ -452,6 +452,8 @@ pub struct ImageSpaceViewState {
     pub since_reset: u32,
     /// The previous frame's `clip_from_world`.
     pub prev_clip_from_world: Option<Mat4>,
+    /// The view and its caustics stand this frame ([`FLAG_STILL_VIEW`]).
+    pub still_view: bool,
     /// Sanitised settings of this frame.
     pub settings: ImageSpaceSettings,
     /// Photons per light this frame.
@@ -633,6 +635,7 @@ impl ImageSpaceViewState {
             generation: None,
             since_reset: 0,
             prev_clip_from_world: None,
+            still_view: false,
             settings,
             photons: 0,
         }
@@ -673,6 +676,24 @@ pub const FLAG_HISTORY: u32 = 4;
 pub const FLAG_LAST: u32 = 8;
 /// The marches use the Hi-Z pyramids.
 pub const FLAG_HIZ: u32 = 16;
+/// The camera is where it was last frame and the caustics have not changed for more frames
+/// than SVGF's mean is worth (`IsParams.frame.w`): SVGF's colour history is a plain mean of up
+/// to `history_cap` frames (no `alpha_color` floor) of the unfiltered photon map
+/// ([`history_step`]).
+pub const FLAG_STILL_VIEW: u32 = 32;
+
+/// The SVGF step that writes the colour history (0 the variance pass, `1 + i` à-trous
+/// iteration `i`): SVGF's first iteration's output while the camera moves (reprojection needs
+/// the quieter history), the unfiltered temporal mean while it stands (a plain mean of
+/// filtered frames would blur the caustic a little more with every frame it keeps), and the
+/// variance pass's output without iterations.
+pub fn history_step(atrous_iterations: u32, still_view: bool) -> u32 {
+    if atrous_iterations == 0 || still_view {
+        0
+    } else {
+        1
+    }
+}
 
 /// Create or resize each image-space view's state and write the frame's uniforms.
 #[allow(clippy::type_complexity)]
@@ -751,15 +772,22 @@ pub fn prepare_image_space_views(
     }
 }
 
+/// The frames SVGF's exponential mean of weight `alpha_color` is worth once its history is
+/// that long: `(2 - a) / a` (9 at the default 0.2).
+fn svgf_worth(s: &ImageSpaceSettings) -> u32 {
+    let a = s.alpha_color.clamp(0.01, 1.0);
+    ((2.0 - a) / a).ceil() as u32
+}
+
 /// What image space asks of the shared temporal stage (`render::temporal`) with SVGF on: its
-/// output is an exponential mean of weight `alpha_color`, worth `(2 - a) / a` frames (9 at
-/// the default 0.2) once its history is that long, so the stage keeps a history of as many
-/// frames. On a still view it only passes SVGF's output on; through a change of the scene,
-/// which resets SVGF, it keeps a running mean where the caustic did not change.
+/// output is worth [`svgf_worth`] frames (a longer plain mean once the view stands is not
+/// counted: the stage's prior then only matters through a reset, when SVGF is SVGF again), so
+/// the stage keeps a history of as many frames. On a still view it only passes SVGF's output
+/// on; through a change of the scene, which resets SVGF, it keeps a running mean where the
+/// caustic did not change.
 fn temporal_request(state: &ImageSpaceViewState) -> Option<TemporalAccumulation> {
     let s = &state.settings;
-    let a = s.alpha_color.clamp(0.01, 1.0);
-    let worth = ((2.0 - a) / a).ceil() as u32;
+    let worth = svgf_worth(s);
     s.denoise.then_some(TemporalAccumulation {
         owner: CausticsTechnique::ImageSpace,
         max_history: worth,
@@ -804,6 +832,10 @@ fn write_uniforms(
     };
     let prev = state.prev_clip_from_world.unwrap_or(clip_from_world);
     state.prev_clip_from_world = Some(clip_from_world);
+    // SVGF's own blend for as many frames as its mean is worth after a reset (a fresh caustic
+    // converges as the paper's does), the plain mean of unfiltered frames after that.
+    let still_view = prev == clip_from_world && state.since_reset > svgf_worth(s);
+    state.still_view = still_view;
     let frame = state.frame;
     state.frame = state.frame.wrapping_add(1);
     let rot = [
@@ -812,7 +844,8 @@ fn write_uniforms(
     ];
     let flags = (if s.denoise { FLAG_DENOISE } else { 0 })
         | (if reset { FLAG_RESET } else { 0 })
-        | (if s.hi_z { FLAG_HIZ } else { 0 });
+        | (if s.hi_z { FLAG_HIZ } else { 0 })
+        | (if still_view { FLAG_STILL_VIEW } else { 0 });
     let mut b = camera.bytes();
     push(&mut b, &prev.to_cols_array());
     b.extend(
@@ -872,8 +905,7 @@ fn write_uniforms(
         if k == n {
             flags |= FLAG_LAST;
         }
-        // The history is the variance pass's output without iterations, else iteration 0's.
-        if (n == 0 && k == 0) || (n > 0 && k == 1) {
+        if k == history_step(n, state.still_view) {
             flags |= FLAG_HISTORY;
         }
         let step = if k == 0 { 0 } else { 1u32 << (k - 1) };
