@@ -69,6 +69,7 @@
 
 pub mod passes;
 pub mod pipelines;
+pub mod rsm_view;
 pub mod view;
 
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
