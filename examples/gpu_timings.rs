@@ -478,6 +478,21 @@ fn passes_cell(report: &RenderReport) -> String {
         .join(" · ")
 }
 
+/// "aaps 41.2 MiB · temporal 31.6 MiB": the GPU memory each part held at the last frame.
+fn memory_cell(report: &RenderReport) -> String {
+    let parts: Vec<String> = report
+        .gpu_bytes
+        .iter()
+        .filter(|(_, b)| **b > 0)
+        .map(|(k, b)| format!("{k} {:.1} MiB", *b as f64 / (1024.0 * 1024.0)))
+        .collect();
+    if parts.is_empty() {
+        "-".into()
+    } else {
+        parts.join(" · ")
+    }
+}
+
 /// The whole Markdown document: header, the table, the seeds' conditions.
 fn markdown(args: &Args, adapter: &str, timed: &[Timed], minutes: f64) -> String {
     let mut md = String::from("# bevy_caustics: GPU milliseconds per pass\n\n");
@@ -534,23 +549,30 @@ fn header(args: &Args, adapter: &str, timed: &[Timed], minutes: f64) -> String {
 /// wall time, and the seeds' figure beside it.
 fn table(timed: &[Timed]) -> String {
     let mut s = String::from(
-        "| technique | scene | photons | clock | n | total ms (median) | per pass, median ms | wall s | seeds' figure |\n\
-         | --- | --- | --- | --- | ---: | ---: | --- | ---: | --- |\n",
+        "| technique | scene | photons | clock | n | total ms (median) | per pass, median ms | GPU memory | wall s | seeds' figure |\n\
+         | --- | --- | --- | --- | ---: | ---: | --- | --- | ---: | --- |\n",
     );
     for t in timed {
         let r = &t.run;
-        let (clock, n, total, passes) = match &t.result {
+        let (clock, n, total, passes, memory) = match &t.result {
             Ok(rep) => (
                 rep.timing.clone(),
                 rep.frame_ms.len().to_string(),
                 median(&rep.frame_ms).map_or("-".into(), |ms| format!("{ms:.3}")),
                 passes_cell(rep),
+                memory_cell(rep),
             ),
-            Err(e) => ("-".into(), "0".into(), "failed".into(), e.replace('|', "/")),
+            Err(e) => (
+                "-".into(),
+                "0".into(),
+                "failed".into(),
+                e.replace('|', "/"),
+                "-".into(),
+            ),
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {clock} | {n} | {total} | {passes} | {:.1} | {} |",
+            "| {} | {} | {} | {clock} | {n} | {total} | {passes} | {memory} | {:.1} | {} |",
             r.technique.name(),
             r.scene,
             r.photons,

@@ -103,7 +103,8 @@ pub struct RenderReport {
 /// last values).
 pub(super) fn sample_pass_times(diagnostics: &DiagnosticsStore, samples: &mut PassSamples) {
     let mut found = Vec::new();
-    for pass in std::iter::once(COMPOSITE_PASS)
+    for pass in [COMPOSITE_PASS, crate::render::temporal::TEMPORAL_PASS]
+        .into_iter()
         .chain(crate::render::aaps::passes::ALL_PASSES)
         .chain(crate::render::volume::passes::all_passes())
         .chain(crate::render::image_space::passes::ALL_PASSES)

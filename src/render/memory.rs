@@ -26,13 +26,14 @@ use super::trace::scene::TraceSceneBuffers;
 use super::volume::view::{VolumeStore, VolumeViewState};
 
 /// The names counted, in a fixed order.
-pub const MEMORY_NAMES: [&str; 6] = [
+pub const MEMORY_NAMES: [&str; 7] = [
     "caustics_buffer",
     "trace",
     "aaps",
     "photon_map",
     "image_space",
     "volume",
+    "temporal",
 ];
 
 /// Bytes of GPU memory per name of [`MEMORY_NAMES`], as of the last rendered frame; shared by

@@ -58,14 +58,23 @@ fn switching_techniques_frees_their_memory() {
     println!("start {start:?}");
     println!("end   {end:?}");
     println!(
-        "peaks while switching: trace {}, aaps {}, photon_map {}, image_space {}, volume {}",
+        "peaks while switching: trace {}, aaps {}, photon_map {}, image_space {}, volume {}, \
+         temporal {}",
         peak("trace"),
         peak("aaps"),
         peak("photon_map"),
         peak("image_space"),
-        peak("volume")
+        peak("volume"),
+        peak("temporal")
     );
-    for name in ["trace", "aaps", "photon_map", "image_space", "volume"] {
+    for name in [
+        "trace",
+        "aaps",
+        "photon_map",
+        "image_space",
+        "volume",
+        "temporal",
+    ] {
         assert!(
             peak(name) > 0,
             "{name} never held memory: the count misses it"
@@ -75,7 +84,8 @@ fn switching_techniques_frees_their_memory() {
         start["volume"] > 0 && start["caustics_buffer"] > 0,
         "{start:?}"
     );
-    for name in ["trace", "aaps", "photon_map", "image_space"] {
+    // Volumes use no temporal stage: its histories exist only while another technique runs.
+    for name in ["trace", "aaps", "photon_map", "image_space", "temporal"] {
         assert_eq!(start[name], 0, "{name} held before it was used: {start:?}");
     }
     assert_eq!(start, end, "100 switches changed the memory held");
