@@ -9,6 +9,7 @@ mod check;
 mod counters;
 mod job;
 mod load_error;
+pub mod motion;
 mod report;
 mod stage;
 mod volume;

@@ -3,6 +3,7 @@
 //! dispatched without work. 128² targets, 65 536 photons per light, 256² RSMs.
 
 use bevy::prelude::*;
+use bevy_caustics::headless::motion::frame_change;
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
 use bevy_caustics::reference::{CausticImage, compare};
 use bevy_caustics::{CausticsTechnique, ImageSpaceSettings};
@@ -150,20 +151,6 @@ fn image_space_hi_z_matches_linear() {
             ms[0] / ms[1]
         );
     }
-}
-
-/// Relative change between consecutive frames: `Σ|L_t − L_{t−1}| / Σ L_t` of luminance.
-fn frame_change(a: &CausticImage, b: &CausticImage) -> f64 {
-    let (mut d, mut s) = (0.0f64, 0.0f64);
-    for (x, y) in a.data.iter().zip(&b.data) {
-        let (lx, ly) = (
-            bevy_caustics::optics::luminance(*x) as f64,
-            bevy_caustics::optics::luminance(*y) as f64,
-        );
-        d += (lx - ly).abs();
-        s += ly;
-    }
-    d / s.max(1e-30)
 }
 
 /// Tilt the sun 8 degrees away at the first measured frame and back at frame 12.

@@ -11,9 +11,11 @@
 // - the output is (n_P P + k E) / (n_P + k), with n_P at most max_history - k, so a
 //   technique's own mean takes over as it grows.
 // On a frame in which the scene changed, and on the max_history frames after it (`FLAG_CLAMP`),
-// a prior whose luminance lies outside the estimate's 3x3 neighbourhood, mean ± gamma standard
-// deviations (the window of Karis's and Salvi's TAA history clamp, on irradiance), is clamped
-// into it and keeps at most `clamped_history` frames (0: dropped), so a moved caustic leaves no
+// a prior whose luminance lies outside the estimate's 3x3 neighbourhood mean ± gamma standard
+// errors of that mean (sigma / sqrt(9); the window of Karis's and Salvi's TAA history clamp,
+// on irradiance, narrowed to the noise of the mean: with sigma itself a noisy single frame's
+// window reached down to 0 and a caustic moving 1 cm a frame trailed 2 to 3 frames), is
+// clamped into it and keeps at most `clamped_history` frames (0: dropped), so a moved caustic leaves no
 // ghost while an unchanged one keeps its history. The test goes on after the change because a
 // technique that restarts its own mean judges badly on its first frames (a wide window) and
 // better as its mean grows, while the prior can weigh for max_history frames. A view in which
@@ -57,7 +59,8 @@ fn clean(c: vec4<f32>) -> vec4<f32> {
     return select(vec4(0.0), c, all(c == c) && all(abs(c) <= vec4(3.0e38)));
 }
 
-// Luminance mean and standard deviation of the estimate over the 3x3 around `p`.
+// Luminance mean of the estimate over the 3x3 around `p`, and that mean's standard error
+// (the neighbourhood's standard deviation over the square root of its pixel count).
 fn neighbourhood(p: vec2<i32>) -> vec2<f32> {
     var s = 0.0;
     var s2 = 0.0;
@@ -75,7 +78,7 @@ fn neighbourhood(p: vec2<i32>) -> vec2<f32> {
         }
     }
     let mu = s / max(k, 1.0);
-    return vec2(mu, sqrt(max(s2 / max(k, 1.0) - mu * mu, 0.0)));
+    return vec2(mu, sqrt(max(s2 / max(k, 1.0) - mu * mu, 0.0) / max(k, 1.0)));
 }
 
 // The prior's colour clamped to luminance `c` (its own colour where it has one).

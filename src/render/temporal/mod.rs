@@ -15,7 +15,7 @@
 //! | change since the last frame | history |
 //! | --- | --- |
 //! | none | kept whole: the new estimate differs from it by noise only |
-//! | the scene only (a light, a caster, a receiver or a material) | dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard deviations ([`CLAMPED_HISTORY`]), kept elsewhere; tested again on each of the next [`TemporalAccumulation::max_history`] frames |
+//! | the scene only (a light, a caster, a receiver or a material) | dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard errors of that mean ([`CLAMPED_HISTORY`]), kept elsewhere; tested again on each of the next [`TemporalAccumulation::max_history`] frames |
 //! | the camera, the viewport, the settings, the buffer | dropped (no reprojection yet) |
 //!
 //! So a light that jitters or a far object that moves keeps the history where the caustic did
@@ -48,9 +48,9 @@ use crate::CausticsTechnique;
 /// GPU span and dispatch-log name of the stage.
 pub const TEMPORAL_PASS: &str = "caustics/temporal";
 
-/// The default width of the history clamp, standard deviations
+/// The default width of the history clamp, standard errors of the 3x3 mean
 /// ([`TemporalAccumulation::clamp_sigma`]).
-pub const DEFAULT_CLAMP_SIGMA: f32 = 2.0;
+pub const DEFAULT_CLAMP_SIGMA: f32 = 1.0;
 
 /// History frames a pixel keeps after its history was clamped (the scene changed there): none.
 /// With 4, image space's caustic took more than 8 frames to come back after the sun turned
@@ -79,8 +79,8 @@ pub struct TemporalAccumulation {
     pub owner: CausticsTechnique,
     /// Frames in the running mean, at least 1 (1: no accumulation, the buffer as drawn).
     pub max_history: u32,
-    /// The history clamp's width on a frame in which the scene changed, in standard
-    /// deviations of the current frame's 3x3 luminance.
+    /// The history clamp's width on a frame in which the scene changed, in standard errors
+    /// of the current frame's 3x3 luminance mean (its standard deviation over 3).
     pub clamp_sigma: f32,
     /// Frames the technique's estimate of this frame covers (at least 1; 1 for a single
     /// frame, `n` for a mean of the last `n` frames that the technique keeps itself).
