@@ -23,6 +23,8 @@ use bevy_caustics::{
     AapsSettings, CausticsTechnique, CausticsVolume, ImageSpaceSettings, PhotonMapSettings,
 };
 use clap::Parser;
+
+mod motion;
 use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
 
@@ -200,6 +202,10 @@ struct Cli {
     /// Side of the square renders, pixels.
     #[arg(long, value_name = "PIXELS", default_value_t = 128, value_parser = integer)]
     size: u32,
+    /// What to measure: `sweep` (REPORT.md and its plots), `motion` (MOTION.md: the moving
+    /// scene, about 5 minutes on lavapipe) or `all`.
+    #[arg(long, value_name = "PART", default_value = "all", value_parser = ["all", "sweep", "motion"])]
+    part: String,
 }
 
 /// `--size`: an integer.
@@ -234,17 +240,35 @@ fn real_main(cli: Cli) -> Result<(), String> {
     let size = cli.size;
     let adapter = find_adapter()?;
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    if cli.part != "motion" {
+        sweep(&root, &out, size, &adapter, &scenes, &techniques)?;
+    }
+    if cli.part != "sweep" {
+        moving(&root, &out, size, &adapter, &techniques)?;
+    }
+    Ok(())
+}
+
+/// REPORT.md and its plots: every quality level of every technique on every scene.
+fn sweep(
+    root: &Path,
+    out: &Path,
+    size: u32,
+    adapter: &str,
+    scenes: &[String],
+    techniques: &[CausticsTechnique],
+) -> Result<(), String> {
     let runs: Vec<(CausticsTechnique, Vec<(String, RenderJob)>)> =
         techniques.iter().map(|t| (*t, levels(*t))).collect();
     let total = scenes.len() * (1 + runs.iter().map(|(_, l)| l.len()).sum::<usize>());
     let started = std::time::Instant::now();
     let mut step = 0;
     let mut points = Vec::new();
-    for scene in &scenes {
+    for scene in scenes {
         let path = root.join("assets/scenes").join(format!("{scene}.gltf"));
         step += 1;
         progress(step, total, &format!("{scene}: converged reference"));
-        let reference = converged(&root, &path, scene, size)?;
+        let reference = converged(root, &path, scene, size)?;
         for (technique, levels) in &runs {
             for (quality, job) in levels {
                 step += 1;
@@ -287,8 +311,8 @@ fn real_main(cli: Cli) -> Result<(), String> {
     }
     eprintln!();
     let minutes = started.elapsed().as_secs_f64() / 60.0;
-    let md = markdown(&adapter, size, minutes, &scenes, &runs, &points);
-    for scene in &scenes {
+    let md = markdown(adapter, size, minutes, scenes, &runs, &points);
+    for scene in scenes {
         for metric in METRICS {
             plot(
                 &out.join(format!("{scene}_{}.svg", metric.file)),
@@ -299,12 +323,45 @@ fn real_main(cli: Cli) -> Result<(), String> {
         }
     }
     // The one-SVG-per-scene plots of earlier reports are replaced by the two above.
-    for scene in &scenes {
+    for scene in scenes {
         let _ = std::fs::remove_file(out.join(format!("{scene}.svg")));
     }
     let report = out.join("REPORT.md");
     std::fs::write(&report, md).map_err(|e| format!("cannot write {}: {e}", report.display()))?;
     println!("wrote {} in {minutes:.1} min", report.display());
+    Ok(())
+}
+
+/// MOTION.md: the moving scene ([`motion`]), for every technique but the reference.
+fn moving(
+    root: &Path,
+    out: &Path,
+    size: u32,
+    adapter: &str,
+    techniques: &[CausticsTechnique],
+) -> Result<(), String> {
+    let started = std::time::Instant::now();
+    let scene = root
+        .join("assets/scenes")
+        .join(format!("{}.gltf", motion::SCENE));
+    eprintln!("moving scene: the converged and per-frame references");
+    let converged = converged(root, &scene, motion::SCENE, size)?;
+    let slide = motion::slide_references(&scene, size)?;
+    let mut rows = Vec::new();
+    for &technique in techniques {
+        if technique == CausticsTechnique::Reference {
+            continue;
+        }
+        eprintln!("\nmoving scene: {}", technique.name());
+        rows.push(motion::measure(
+            &scene, size, technique, &converged, &slide,
+        )?);
+    }
+    let minutes = started.elapsed().as_secs_f64() / 60.0;
+    let path = out.join("MOTION.md");
+    std::fs::write(&path, motion::markdown(adapter, size, minutes, &rows))
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    println!("wrote {} in {minutes:.1} min", path.display());
     Ok(())
 }
 
