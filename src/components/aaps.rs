@@ -107,8 +107,8 @@ pub struct AapsSettings {
     /// traces a freshly rotated sample pattern, so the mean gathers independent photons and a
     /// still view settles on it rather than on one frame's grain. Default 32 (ours). 1 shows
     /// each frame alone. Range [1, 1024]. Cost: 48 bytes per pixel and one full-screen pass.
-    /// A moving camera restarts it (no reprojection yet); a changed scene keeps it where the
-    /// caustic did not change (`history_clamp`).
+    /// A moving camera reprojects it (by each pixel's surface); a changed scene keeps it where
+    /// the caustic did not change (`history_clamp`).
     #[reflect(@1_u32..=1024_u32)]
     pub history_frames: u32,
     /// On a frame in which the scene changed, a pixel's history is dropped where its luminance

@@ -81,6 +81,10 @@ pub struct ViewSettle {
     /// What changed since the last frame (the temporal stage keeps its history through a
     /// change of the scene alone, and drops it on any other).
     pub change: SettleChange,
+    /// With [`SettleChange::View`]: only the camera's `clip_from_world` changed (the scene at
+    /// most as [`SettleChange::Surfaces`]), so a history can be reprojected rather than
+    /// dropped.
+    pub camera_only: bool,
     /// The technique kept its last result this frame (set by its prepare system; the
     /// composite then draws the buffer without a pass of the technique having run).
     kept: AtomicBool,
@@ -159,6 +163,7 @@ pub fn track_settle(
                 last_ran: false,
                 keep: false,
                 change: SettleChange::View,
+                camera_only: false,
                 kept: AtomicBool::new(false),
                 ran: AtomicBool::new(false),
             });
@@ -166,6 +171,16 @@ pub fn track_settle(
         };
         let ran = settle.ran.swap(false, Ordering::Relaxed);
         settle.last_ran = ran;
+        settle.camera_only = settle.key.as_ref().is_some_and(|k| {
+            key.buffer != 0
+                && k.clip_from_world != key.clip_from_world
+                && k.caustic_generation == key.caustic_generation
+                && SettleKey {
+                    generation: key.generation,
+                    clip_from_world: key.clip_from_world,
+                    ..k.clone()
+                } == key
+        });
         settle.change = match &settle.key {
             Some(k) if *k == key && key.buffer != 0 => SettleChange::None,
             Some(k)

@@ -31,11 +31,14 @@ struct TemporalParams {
     gamma: f32,
     clamped_history: f32,
     depth_tolerance: f32,
+    // With FLAG_REPROJECT: last frame's clip_from_world times this frame's world_from_clip.
+    reproject: mat4x4<f32>,
 }
 
 const FLAG_RESET: u32 = 1u;
 const FLAG_CLAMP: u32 = 2u;
 const FLAG_SURFACES: u32 = 4u;
+const FLAG_REPROJECT: u32 = 8u;
 
 @group(0) @binding(0) var<uniform> params: TemporalParams;
 // This frame's estimate (the caustics buffer).
@@ -94,6 +97,33 @@ fn with_luminance(prior: vec3<f32>, now: vec3<f32>, c: f32) -> vec3<f32> {
     return vec3(c);
 }
 
+// With a moved camera: where last frame's view showed the surface of pixel `p` (depth `z`,
+// reverse-Z NDC), as (pixel x, pixel y, that surface's depth there); x < 0 when it was off
+// screen or `p` shows no surface. Irradiance belongs to the place, so the history follows the
+// surface (the camera's own motion, no motion vectors of moving objects).
+fn reprojected(p: vec2<i32>, z: f32) -> vec3<f32> {
+    if !(z > 0.0) {
+        return vec3(-1.0);
+    }
+    let size = vec2<f32>(params.size);
+    let ndc = vec2((f32(p.x) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(p.y) + 0.5) / size.y * 2.0);
+    let c = params.reproject * vec4(ndc, z, 1.0);
+    if !(c.w > 0.0) {
+        return vec3(-1.0);
+    }
+    let n = c.xyz / c.w;
+    let q = vec2((n.x + 1.0) * 0.5 * size.x, (1.0 - n.y) * 0.5 * size.y);
+    if !(all(q >= vec2(0.0)) && all(q < size)) {
+        return vec3(-1.0);
+    }
+    return vec3(q, n.z);
+}
+
+// Whether depths `a` and `b` (reverse-Z NDC) are of one surface.
+fn same_surface(a: f32, b: f32) -> bool {
+    return abs(a - b) <= params.depth_tolerance * max(a, b);
+}
+
 @compute @workgroup_size(8, 8)
 fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     if any(gid.xy >= params.size) {
@@ -102,24 +132,35 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = vec2<i32>(gid.xy);
     let now = clean(textureLoad(current, p, 0));
     let k = max(params.k, 1.0);
-    let stored = clean(textureLoad(prior_in, p, 0));
+    let z = textureLoad(view_depth, p, 0);
+    // Where this pixel's history lies, and whether it belongs to another surface.
+    var h = p;
+    var other = false;
+    if (params.flags & FLAG_REPROJECT) != 0u {
+        let r = reprojected(p, z);
+        if r.x < 0.0 {
+            other = true;
+        } else {
+            h = vec2<i32>(floor(r.xy));
+            other = !same_surface(r.z, textureLoad(depth_in, h, 0).r);
+        }
+    } else if (params.flags & FLAG_SURFACES) != 0u {
+        // The scene's geometry changed (a receiver moved, even one out of the caustic light's
+        // reach): a pixel whose depth moved shows another surface.
+        other = !same_surface(z, textureLoad(depth_in, p, 0).r);
+    }
+    let stored = clean(textureLoad(prior_in, h, 0));
     var prior = stored.rgb;
     var n = max(stored.a, 0.0);
     if (params.flags & FLAG_RESET) != 0u {
         prior = vec3(0.0);
         n = 0.0;
     } else if k <= 1.0 {
-        prior = clean(textureLoad(last_in, p, 0)).rgb;
+        prior = clean(textureLoad(last_in, h, 0)).rgb;
         n += max(params.k_last, 1.0);
     }
-    // The scene's geometry changed (a receiver moved, even one out of the caustic light's
-    // reach): a pixel whose depth moved shows another surface, and its history is dropped.
-    let z = textureLoad(view_depth, p, 0);
-    if (params.flags & FLAG_SURFACES) != 0u {
-        let z0 = textureLoad(depth_in, p, 0).r;
-        if !(abs(z - z0) <= params.depth_tolerance * max(z, z0)) {
-            n = 0.0;
-        }
+    if other {
+        n = 0.0;
     }
     textureStore(depth_out, p, vec4(z, 0.0, 0.0, 0.0));
     if n > 0.0 && (params.flags & FLAG_CLAMP) != 0u {

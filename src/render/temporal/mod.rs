@@ -16,7 +16,8 @@
 //! | --- | --- |
 //! | none | kept whole: the new estimate differs from it by noise only |
 //! | the scene only (a light, a caster, a receiver or a material) | dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard errors of that mean ([`CLAMPED_HISTORY`]), kept elsewhere; tested again on each of the next [`TemporalAccumulation::max_history`] frames |
-//! | the camera, the viewport, the settings, the buffer | dropped (no reprojection yet) |
+//! | the camera alone (the scene at most as above without a caustic change) | reprojected: each pixel takes the history of the pixel that showed its surface last frame (its world position through last frame's `clip_from_world`), dropped where that was off screen or showed another surface (depth) |
+//! | the viewport, the settings, the buffer | dropped |
 //!
 //! So a light that jitters or a far object that moves keeps the history where the caustic did
 //! not change, and a moved caustic leaves no ghost. A view that settles
@@ -44,6 +45,7 @@ use super::settle::{SettleChange, ViewSettle};
 use super::span::SpanSettle;
 use super::{CausticsDispatchLog, ExtractedCaustics, ViewCausticsBuffer};
 use crate::CausticsTechnique;
+use bevy::render::view::ExtractedView;
 
 /// GPU span and dispatch-log name of the stage.
 pub const TEMPORAL_PASS: &str = "caustics/temporal";
@@ -70,6 +72,10 @@ pub const SURFACE_DEPTH_TOLERANCE: f32 = 0.02;
 const FLAG_RESET: u32 = 1;
 const FLAG_CLAMP: u32 = 2;
 const FLAG_SURFACES: u32 = 4;
+const FLAG_REPROJECT: u32 = 8;
+
+/// Bytes of the stage's parameters (`TemporalParams` in `accumulate.wgsl`).
+const PARAMS_BYTES: u64 = 112;
 
 /// A technique's request for the stage on a view (render world; inserted by its prepare
 /// system each frame it runs). It holds while the view's technique is its `owner`.
@@ -111,6 +117,8 @@ pub struct ViewTemporal {
     /// Frames of this frame's estimate (f32 bits), and of the last run's.
     k: AtomicU32,
     k_last: AtomicU32,
+    /// The camera's `clip_from_world` of the last frame (the one the history belongs to).
+    clip_from_world: Mat4,
 }
 
 impl ViewTemporal {
@@ -216,7 +224,7 @@ impl ViewTemporal {
             depth: [0, 1].map(|_| depth_history(device, size)),
             params: device.create_buffer(&BufferDescriptor {
                 label: Some("caustics_temporal_params"),
-                size: 48,
+                size: PARAMS_BYTES,
                 usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -226,6 +234,7 @@ impl ViewTemporal {
             probation: AtomicU32::new(0),
             k: AtomicU32::new(1f32.to_bits()),
             k_last: AtomicU32::new(1f32.to_bits()),
+            clip_from_world: Mat4::IDENTITY,
         }
     }
 }
@@ -244,9 +253,10 @@ pub fn prepare_temporal(
         Option<&ViewCausticsBuffer>,
         Option<&ViewSettle>,
         Option<&mut ViewTemporal>,
+        &ExtractedView,
     )>,
 ) {
-    for (entity, request, caustics, buffer, settle, temporal) in &mut views {
+    for (entity, request, caustics, buffer, settle, temporal, view) in &mut views {
         let owned = request
             .zip(caustics)
             .filter(|(r, c)| r.owner == c.technique)
@@ -258,6 +268,7 @@ pub fn prepare_temporal(
             continue;
         };
         let mut fresh = None;
+        let new = !temporal.as_ref().is_some_and(|t| t.size == buffer.size);
         let temporal = match temporal {
             Some(t) if t.size == buffer.size => t.into_inner(),
             _ => {
@@ -265,54 +276,94 @@ pub fn prepare_temporal(
                 fresh.as_mut().unwrap()
             }
         };
-        match settle.map_or(SettleChange::View, |s| s.change) {
-            SettleChange::None => {}
-            SettleChange::Surfaces => temporal.surfaces.store(true, Ordering::Relaxed),
-            SettleChange::Scene => {
-                temporal
-                    .probation
-                    .store(request.max_history.max(1), Ordering::Relaxed);
-                temporal.surfaces.store(true, Ordering::Relaxed);
-            }
-            SettleChange::View => {
-                temporal.reset.store(true, Ordering::Relaxed);
-                temporal.probation.store(0, Ordering::Relaxed);
-            }
-        }
+        let now = super::clip_from_world(view);
+        let reproject = note_change(temporal, request, settle, new);
         let flags = if temporal.reset.load(Ordering::Relaxed) {
             FLAG_RESET
         } else {
             let on = |b: bool, f: u32| if b { f } else { 0 };
             on(temporal.probation.load(Ordering::Relaxed) > 0, FLAG_CLAMP)
                 | on(temporal.surfaces.load(Ordering::Relaxed), FLAG_SURFACES)
-        };
-        let clamp_sigma = if request.clamp_sigma.is_finite() {
-            request.clamp_sigma.max(0.0)
-        } else {
-            0.0
+                | on(reproject, FLAG_REPROJECT)
         };
         let k = request.frames.max(1) as f32;
         temporal.k.store(k.to_bits(), Ordering::Relaxed);
-        let mut bytes = Vec::with_capacity(48);
-        for v in [buffer.size.x, buffer.size.y, flags] {
-            bytes.extend_from_slice(&v.to_le_bytes());
-        }
-        for v in [
-            k,
-            f32::from_bits(temporal.k_last.load(Ordering::Relaxed)),
-            request.max_history.max(1) as f32,
-            clamp_sigma,
-            CLAMPED_HISTORY,
-            SURFACE_DEPTH_TOLERANCE,
-        ] {
-            bytes.extend_from_slice(&v.to_le_bytes());
-        }
-        bytes.resize(48, 0);
+        // Last frame's clip from this frame's clip, in f64 (a reverse-Z projection's inverse
+        // loses digits in f32).
+        let reprojection =
+            (temporal.clip_from_world.as_dmat4() * now.as_dmat4().inverse()).as_mat4();
+        temporal.clip_from_world = now;
+        let bytes = params_bytes(buffer.size, flags, k, temporal, request, reprojection);
         queue.write_buffer(&temporal.params, 0, &bytes);
         if let Some(t) = fresh {
             commands.entity(entity).insert(t);
         }
     }
+}
+
+/// Note this frame's change in `temporal`; true when the history is to be reprojected (the
+/// camera alone moved, and there is a history).
+fn note_change(
+    temporal: &ViewTemporal,
+    request: &TemporalAccumulation,
+    settle: Option<&ViewSettle>,
+    fresh: bool,
+) -> bool {
+    match settle.map_or(SettleChange::View, |s| s.change) {
+        SettleChange::None => false,
+        SettleChange::Surfaces => {
+            temporal.surfaces.store(true, Ordering::Relaxed);
+            false
+        }
+        SettleChange::Scene => {
+            temporal
+                .probation
+                .store(request.max_history.max(1), Ordering::Relaxed);
+            temporal.surfaces.store(true, Ordering::Relaxed);
+            false
+        }
+        SettleChange::View if !fresh && settle.is_some_and(|s| s.camera_only) => true,
+        SettleChange::View => {
+            temporal.reset.store(true, Ordering::Relaxed);
+            temporal.probation.store(0, Ordering::Relaxed);
+            false
+        }
+    }
+}
+
+/// The stage's parameters (`TemporalParams` in `accumulate.wgsl`).
+fn params_bytes(
+    size: UVec2,
+    flags: u32,
+    k: f32,
+    temporal: &ViewTemporal,
+    request: &TemporalAccumulation,
+    reprojection: Mat4,
+) -> Vec<u8> {
+    let clamp_sigma = if request.clamp_sigma.is_finite() {
+        request.clamp_sigma.max(0.0)
+    } else {
+        0.0
+    };
+    let mut bytes = Vec::with_capacity(PARAMS_BYTES as usize);
+    for v in [size.x, size.y, flags] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [
+        k,
+        f32::from_bits(temporal.k_last.load(Ordering::Relaxed)),
+        request.max_history.max(1) as f32,
+        clamp_sigma,
+        CLAMPED_HISTORY,
+        SURFACE_DEPTH_TOLERANCE,
+    ] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    bytes.resize(48, 0);
+    for v in reprojection.to_cols_array() {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    bytes
 }
 
 /// Combine the caustics buffer with the view's history and write the output back over it (one
