@@ -526,15 +526,7 @@ fn converged(
     {
         return Ok(img);
     }
-    let report = run(RenderJob {
-        scene: scene_path.to_path_buf(),
-        width: size,
-        height: size,
-        photons: Some(converged_photons(scene)),
-        seed: CONVERGED_SEED,
-        frames: 4,
-        ..Default::default()
-    })?;
+    let report = run(converged_job(scene_path, scene, size))?;
     let img = report
         .caustics
         .unwrap_or_else(|| CausticImage::new(size, size));
@@ -543,6 +535,20 @@ fn converged(
     std::fs::write(&meta, serde_json::to_string_pretty(&recipe).unwrap())
         .map_err(|e| e.to_string())?;
     Ok(img)
+}
+
+/// The reference technique's job for the converged image of `scene` at `size²` (the recipe of
+/// [`converged_recipe`]).
+fn converged_job(scene_path: &Path, scene: &str, size: u32) -> RenderJob {
+    RenderJob {
+        scene: scene_path.to_path_buf(),
+        width: size,
+        height: size,
+        photons: Some(converged_photons(scene)),
+        seed: CONVERGED_SEED,
+        frames: 4,
+        ..Default::default()
+    }
 }
 
 /// A plotted error metric.

@@ -20,7 +20,6 @@ use bevy_caustics::headless::motion::{
     MEASURED, SLIDE_STEP, circle_cube, jitter_sun, mean_flicker, mean_rmse, move_ball, slide_ball,
 };
 use bevy_caustics::headless::{RenderJob, run};
-use bevy_caustics::reference::cache::{CONVERGED_SEED, converged_photons};
 use bevy_caustics::reference::{CausticImage, compare};
 
 /// The scene of the moving runs.
@@ -66,14 +65,8 @@ fn reference_at(scene: &Path, size: u32, steps: u32) -> Result<CausticImage, Str
     }
     REFERENCE_STEPS.store(steps, Ordering::Relaxed);
     let report = run(RenderJob {
-        scene: scene.to_path_buf(),
-        width: size,
-        height: size,
-        photons: Some(converged_photons(SCENE)),
-        seed: CONVERGED_SEED,
-        frames: 4,
         hook: Some(offset_ball),
-        ..Default::default()
+        ..super::converged_job(scene, SCENE, size)
     })?;
     let img = report
         .caustics

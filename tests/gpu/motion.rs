@@ -28,6 +28,35 @@ use bevy_caustics::{AapsSettings, Caustics, CausticsDebugView, CausticsTechnique
 
 use super::{GPU, require_gpu, scene};
 
+/// The caustics of every frame of `glass_sphere` (128², 2^16 photons per light, defaults but
+/// `aaps`) rendered for `frames` frames with `per_frame`, each checked finite.
+fn sphere_frames(
+    technique: T,
+    frames: usize,
+    per_frame: Option<fn(&mut World, u32)>,
+    aaps: AapsSettings,
+) -> Vec<CausticImage> {
+    let report = run(RenderJob {
+        scene: scene("glass_sphere"),
+        technique,
+        width: 128,
+        height: 128,
+        photons: Some(1 << 16),
+        frames: frames as u32,
+        every_frame: true,
+        per_frame,
+        aaps,
+        ..Default::default()
+    })
+    .expect("render");
+    let f = report.frame_caustics;
+    assert!(f.len() >= frames, "{} frames", f.len());
+    for img in &f {
+        assert!(img.all_finite(), "{technique:?}: non-finite caustics");
+    }
+    f
+}
+
 /// (RMSE in lux, flicker) of one run over [`MEASURED`].
 fn measure(
     technique: T,
@@ -35,25 +64,8 @@ fn measure(
     per_frame: Option<fn(&mut World, u32)>,
     reference: &CausticImage,
 ) -> (f64, f64) {
-    let report = run(RenderJob {
-        scene: scene("glass_sphere"),
-        technique,
-        width: 128,
-        height: 128,
-        photons: Some(1 << 16),
-        frames: MEASURED.end as u32,
-        every_frame: true,
-        per_frame,
-        aaps,
-        ..Default::default()
-    })
-    .expect("render");
-    let frames = &report.frame_caustics;
-    assert!(frames.len() >= MEASURED.end, "{} frames", frames.len());
-    for f in frames {
-        assert!(f.all_finite(), "{technique:?}: non-finite caustics");
-    }
-    (mean_rmse(frames, |_| reference), mean_flicker(frames))
+    let frames = sphere_frames(technique, MEASURED.end, per_frame, aaps);
+    (mean_rmse(&frames, |_| reference), mean_flicker(&frames))
 }
 
 /// AAPS accumulates and keeps its history through unrelated motion:
@@ -517,27 +529,14 @@ fn a_moving_caster_leaves_no_trail() {
     let references: Vec<(u32, CausticImage)> =
         (first..=last).map(|s| (s, slide_reference(s))).collect();
     for technique in [T::Aaps, T::ImageSpace, T::PhotonMap] {
-        let report = run(RenderJob {
-            scene: scene("glass_sphere"),
+        let frames = &sphere_frames(
             technique,
-            width: 128,
-            height: 128,
-            photons: Some(1 << 16),
-            frames: SLIDE_MEASURED.end as u32,
-            every_frame: true,
-            per_frame: Some(slide_ball),
-            ..Default::default()
-        })
-        .expect("render");
-        let frames = &report.frame_caustics;
-        assert!(
-            frames.len() >= SLIDE_MEASURED.end,
-            "{} frames",
-            frames.len()
+            SLIDE_MEASURED.end,
+            Some(slide_ball),
+            AapsSettings::default(),
         );
         let mut own_rmse = Vec::new();
         for i in SLIDE_MEASURED {
-            assert!(frames[i].all_finite(), "{technique:?}: non-finite caustics");
             let rmse: Vec<(u32, f64)> = references
                 .iter()
                 .map(|(s, r)| (*s, compare(&frames[i], r, None).expect("size").rmse))
@@ -612,22 +611,14 @@ fn a_moving_camera_keeps_the_history() {
     let still_reference = orbit_reference(0);
     for technique in [T::Aaps, T::PhotonMap] {
         let rmse = |per_frame: Option<fn(&mut World, u32)>| -> f64 {
-            let report = run(RenderJob {
-                scene: scene("glass_sphere"),
+            let f = sphere_frames(
                 technique,
-                width: 128,
-                height: 128,
-                photons: Some(1 << 16),
-                frames: SLIDE_MEASURED.end as u32,
-                every_frame: true,
+                SLIDE_MEASURED.end,
                 per_frame,
-                ..Default::default()
-            })
-            .expect("render");
-            let f = &report.frame_caustics;
+                AapsSettings::default(),
+            );
             SLIDE_MEASURED
                 .map(|i| {
-                    assert!(f[i].all_finite(), "{technique:?}: non-finite caustics");
                     let r = if per_frame.is_some() {
                         &references[steps(i) as usize]
                     } else {
