@@ -284,7 +284,7 @@ fn empty_volume(world: &mut bevy::prelude::World) {
 
 /// Stress: photons exactly parallel to the entry face and 1e-4 rad off it, a caster whose
 /// faces lie on slab boundaries, an empty volume, 1 and 16 slabs (IOR 4.0 and the other stiff
-/// cases run through volumes in `stiff_and_extreme_cases_gpu`): finite caustics, no NaN
+/// cases run through volumes in `stiff::stiff_cases_volume`): finite caustics, no NaN
 /// guard fired, no energy created, no panic, no validation error (the runner fails on one).
 #[test]
 fn volume_stress_cases() {
