@@ -102,8 +102,8 @@ struct Cli {
     #[arg(long, value_name = "FIELD=VALUE,...")]
     aaps: Vec<String>,
     /// Fields of the volumes fitted around the casters (CausticsVolume), as field=value,...:
-    /// slabs, photons, projector_resolution, gbuffer_resolution, tile_size, splat_overlap,
-    /// blur_radius, lod_distance, differential, frustum_cull, progressive
+    /// slabs, photons, projector_resolution, gbuffer_resolution, tile_size, density_photons,
+    /// splat_overlap, blur_radius, lod_distance, differential, frustum_cull, progressive
     /// [default: CausticsVolume::default()].
     #[arg(long, value_name = "FIELD=VALUE,...")]
     volume: Vec<String>,
@@ -249,6 +249,7 @@ impl Cli {
                     "projector_resolution" => a.projector_resolution = v as u32,
                     "gbuffer_resolution" => a.gbuffer_resolution = v as u32,
                     "tile_size" => a.tile_size = v as u32,
+                    "density_photons" => a.density_photons = v.max(0.0) as u32,
                     "splat_overlap" => a.splat_overlap = v,
                     "blur_radius" => a.blur_radius = v as u32,
                     "lod_distance" => a.lod_distance = v,

@@ -111,6 +111,17 @@ pub fn sanitize_volume(v: &mut CausticsVolume, limits: &CausticsLimits) -> Vec<F
         ));
         v.tile_size = t;
     }
+    let k = v.density_photons.clamp(1, 65_536);
+    if k != v.density_photons {
+        fixes.push((
+            "density_photons",
+            format!(
+                "{} is outside [1, 65536]; clamped to {k}",
+                v.density_photons
+            ),
+        ));
+        v.density_photons = k;
+    }
     let o = if v.splat_overlap.is_finite() {
         v.splat_overlap.clamp(0.25, 64.0)
     } else {

@@ -18,6 +18,7 @@ pub(crate) fn apply_template(v: &mut CausticsVolume, t: &CausticsVolume) {
     v.projector_resolution = t.projector_resolution;
     v.gbuffer_resolution = t.gbuffer_resolution;
     v.tile_size = t.tile_size;
+    v.density_photons = t.density_photons;
     v.splat_overlap = t.splat_overlap;
     v.blur_radius = t.blur_radius;
     v.lod_distance = t.lod_distance;

@@ -26,7 +26,7 @@ use bevy::render::{RenderApp, RenderStartup};
 use crate::render::aaps::view::AapsViewState;
 use crate::render::image_space::view::ImageSpaceViewState;
 use crate::render::photon_map::view::PhotonMapViewState;
-use crate::render::volume::gpu::tile_stride;
+use crate::render::volume::gpu::tile_set_words;
 use crate::render::volume::view::VolumeStore;
 use crate::render::{ExtractedCaustics, ViewCausticsBuffer};
 
@@ -337,7 +337,7 @@ fn colour_map_pass(
             LiveKind::ProjectorTiles => {
                 let Some(v) = volume else { continue };
                 let side = v.key.projector.div_ceil(v.key.tile.max(1));
-                let offset = images.face.min(5) as u64 * tile_stride(&v.key);
+                let offset = images.face.min(5) as u64 * tile_set_words(&v.key);
                 (&buffer.view, &v.tiles, empty, side, buffer.size, offset)
             }
             LiveKind::RsmLayer => {

@@ -18,6 +18,10 @@ pub struct ImageMetrics {
     pub relative_rmse: f64,
     /// Mean LDR-FLIP error in [0, 1] (see [`flip_mean`] for the tone mapping).
     pub flip: f64,
+    /// Mean LDR-FLIP error over the pixels the caustic lights ([`caustic_lit`]: reference
+    /// luminance at least [`LIT_FRACTION`] of its 99th percentile), same tone mapping as
+    /// `flip`: how sharp and how bright the caustic itself is, not the dark floor around it.
+    pub flip_caustic: f64,
     /// `(sum test - sum ref) / sum ref` of luminance: the relative total-energy error.
     pub energy_error: f64,
     /// Pixels compared.
@@ -55,10 +59,13 @@ pub fn compare(
     }
     let rmse = if n > 0 { (se / n as f64).sqrt() } else { 0.0 };
     let mean_ref = if n > 0 { sr / n as f64 } else { 0.0 };
+    let flip = flip_map(test, reference, mask);
+    let lit = caustic_lit(reference, mask);
     Some(ImageMetrics {
         rmse,
         relative_rmse: if mean_ref > 0.0 { rmse / mean_ref } else { 0.0 },
-        flip: flip_mean(test, reference, mask),
+        flip: masked_mean(&flip, mask),
+        flip_caustic: masked_mean(&flip, Some(&lit)),
         energy_error: if sr > 0.0 {
             (st - sr) / sr
         } else if st > 0.0 {
@@ -82,6 +89,27 @@ fn finite_lum(v: Vec3) -> f64 {
 /// reference saturates), clamped to [0, 1] and sRGB-encoded. Pixels outside the mask are set
 /// to black in both. The mean is over the masked pixels, at the default 67 pixels per degree.
 pub fn flip_mean(test: &CausticImage, reference: &CausticImage, mask: Option<&[bool]>) -> f64 {
+    masked_mean(&flip_map(test, reference, mask), mask)
+}
+
+/// Share of the reference's 99th-percentile luminance from which a pixel counts as lit by
+/// the caustic ([`caustic_lit`]).
+pub const LIT_FRACTION: f32 = 0.01;
+
+/// The pixels of `mask` that the caustic lights: reference luminance at least
+/// [`LIT_FRACTION`] of the reference's 99th-percentile luminance over the mask (none when
+/// the reference is dark).
+pub fn caustic_lit(reference: &CausticImage, mask: Option<&[bool]>) -> Vec<bool> {
+    let p99 = p99_luminance(reference, mask);
+    reference
+        .data
+        .iter()
+        .enumerate()
+        .map(|(i, v)| in_mask(mask, i) && p99 > 0.0 && finite_lum(*v) as f32 >= LIT_FRACTION * p99)
+        .collect()
+}
+
+fn p99_luminance(reference: &CausticImage, mask: Option<&[bool]>) -> f32 {
     let mut lums: Vec<f32> = reference
         .data
         .iter()
@@ -93,7 +121,12 @@ pub fn flip_mean(test: &CausticImage, reference: &CausticImage, mask: Option<&[b
         return 0.0;
     }
     lums.sort_by(f32::total_cmp);
-    let p99 = lums[((lums.len() - 1) as f32 * 0.99) as usize];
+    lums[((lums.len() - 1) as f32 * 0.99) as usize]
+}
+
+/// Per-pixel FLIP error with the tone mapping of [`flip_mean`].
+fn flip_map(test: &CausticImage, reference: &CausticImage, mask: Option<&[bool]>) -> Vec<f32> {
+    let p99 = p99_luminance(reference, mask);
     let scale = if p99 > 0.0 { 1.0 / p99 } else { 1.0 };
     let encode = |img: &CausticImage| -> Vec<u8> {
         let mut out = Vec::with_capacity(img.data.len() * 3);
@@ -112,10 +145,12 @@ pub fn flip_mean(test: &CausticImage, reference: &CausticImage, mask: Option<&[b
     let (w, h) = (reference.width, reference.height);
     let r = nv_flip::FlipImageRgb8::with_data(w, h, &encode(reference));
     let t = nv_flip::FlipImageRgb8::with_data(w, h, &encode(test));
-    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
-    let mut s = 0.0f64;
-    let mut n = 0u64;
-    for (i, e) in err.iter().enumerate() {
+    nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
+}
+
+fn masked_mean(values: &[f32], mask: Option<&[bool]>) -> f64 {
+    let (mut s, mut n) = (0.0f64, 0u64);
+    for (i, e) in values.iter().enumerate() {
         if in_mask(mask, i) {
             s += *e as f64;
             n += 1;

@@ -30,6 +30,7 @@ fn cached_references_are_current() {
         scenes::pool(),
         scenes::ring(),
         scenes::empty(),
+        scenes::closed::gem_room(),
     ] {
         let name = &desc.name;
         let meta = std::fs::read_to_string(root.join(format!("{name}_128.json")))

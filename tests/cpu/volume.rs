@@ -462,6 +462,7 @@ fn volume_settings_are_clamped() {
     let mut v = CausticsVolume {
         gbuffer_resolution: 1,
         tile_size: 0,
+        density_photons: 0,
         splat_overlap: f32::NAN,
         blur_radius: 99,
         lod_distance: -1.0,
@@ -476,6 +477,7 @@ fn volume_settings_are_clamped() {
         [
             "gbuffer_resolution",
             "tile_size",
+            "density_photons",
             "splat_overlap",
             "blur_radius",
             "lod_distance"

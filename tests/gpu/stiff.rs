@@ -220,8 +220,8 @@ fn stiff_cases_volume() {
     }
 }
 
-/// The whole frame with the default technique (up to 2^18 photons): every linear pixel the
-/// composite writes is finite.
+/// The whole frame (the job's default technique, the CPU reference, up to 2^18 photons,
+/// uploaded into the caustics buffer and composited): every linear pixel is finite.
 #[test]
 fn stiff_cases_whole_frame() {
     let _g = GPU.slot();

@@ -56,14 +56,19 @@ fn volume_closed_forms_and_energy() {
 }
 
 /// `glass_sphere` in a fitted volume with 1, 2 and 3 slabs: total caustic energy within 10 %
-/// of the CPU reference; RMSE and FLIP printed for the note.
+/// of the CPU reference; RMSE and FLIP printed for the note. With the default 3 slabs, FLIP
+/// over the pixels the caustic lights (`flip_caustic`) at most 0.10 (issue 29 item 3; the
+/// adaptive density tiles and splat overlap 16: 0.088, was 0.102 with the fixed grid of 4 and
+/// overlap 4). The brilliant-cut gem in its closed room (IOR 2.4, spot) against its cached
+/// reference: energy within 10 %, FLIP over the caustic at most 0.32 (0.304; 0.327 before;
+/// its sparkles need far more than 80 000 photons: the issue's 0.10 is not met there).
 #[test]
 fn volume_glass_sphere_against_reference() {
     let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
-    let reference = reference("glass_sphere");
+    let sphere = reference("glass_sphere");
     for slabs in [1, 2, 3] {
         let report = volume(
             scene("glass_sphere"),
@@ -76,13 +81,14 @@ fn volume_glass_sphere_against_reference() {
         );
         let img = report.caustics.expect("caustics");
         assert!(img.all_finite());
-        let m = compare(&img, &reference, None).expect("same size");
+        let m = compare(&img, &sphere, None).expect("same size");
         let c = report.volume.clone().expect("counters");
         println!(
-            "glass_sphere, {slabs} slab(s): energy error {:+.2} %, RMSE {:.1} lx, FLIP {:.4}, {c:?}",
+            "glass_sphere, {slabs} slab(s): energy error {:+.2} %, RMSE {:.1} lx, FLIP {:.4}, over the caustic {:.4}, {c:?}",
             m.energy_error * 100.0,
             m.rmse,
             m.flip,
+            m.flip_caustic,
         );
         assert!(
             m.energy_error.abs() < 0.10,
@@ -90,7 +96,29 @@ fn volume_glass_sphere_against_reference() {
             m.energy_error
         );
         assert!(c.splatted_lm <= c.entered_lm * (1.0 + 1e-5), "{c:?}");
+        if slabs == 3 {
+            assert!(m.flip_caustic <= 0.10, "glass_sphere: {m:?}");
+        }
     }
+    let gem = scenes::closed::gem_room();
+    let dir = std::env::temp_dir().join(format!("bevy_caustics_gem_{}", std::process::id()));
+    scenes::gltf::write_gltf(&gem, &dir).unwrap();
+    let report = volume(dir.join("gem_room.gltf"), 128, 4, CausticsVolume::default());
+    let m = compare(
+        &report.caustics.expect("caustics"),
+        &reference("gem_room"),
+        None,
+    )
+    .unwrap();
+    println!(
+        "gem_room: energy error {:+.2} %, RMSE {:.1} lx, FLIP {:.4}, over the caustic {:.4}",
+        m.energy_error * 100.0,
+        m.rmse,
+        m.flip,
+        m.flip_caustic,
+    );
+    assert!(m.energy_error.abs() < 0.10, "gem_room: {m:?}");
+    assert!(m.flip_caustic <= 0.32, "gem_room: {m:?}");
 }
 
 fn move_lower_caster(world: &mut bevy::prelude::World, frame: u32) {

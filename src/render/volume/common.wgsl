@@ -12,7 +12,7 @@ struct VolParams {
     dims: vec4<u32>,      // slab G-buffer side, projector side, tile side (texels), seed
     counts: vec4<u32>,    // photon capacity, slabs, exit-face mask (bit per face code), photons seeded
     splat: vec4<f32>,     // overlap, max anisotropy, spread, flux scale (progressive mode)
-    bounds_lo: vec4<f32>, // scene box (world), for the projector march
+    bounds_lo: vec4<f32>, // scene box (world), for the projector march; w density photons
     bounds_hi: vec4<f32>,
     // This frame's ranges of the trace list (level 0's live list): start and count entering
     // slab 0, start and count the projectors march (src/volume/progressive.rs).
@@ -37,8 +37,8 @@ struct VolPhoton {
 // A photon on its receiver (64 bytes); zero flux: nothing to draw.
 struct VolHit {
     pos: vec4<f32>,    // world, w path length since the last specular event
-    normal: vec4<f32>, // receiver normal facing the photon, w receiver area of its tile (m^2)
-    dir: vec4<f32>,    // world direction, w bitcast tile index
+    normal: vec4<f32>, // receiver normal facing the photon, w receiver area of its texel (m^2)
+    dir: vec4<f32>,    // world direction, w bitcast set and texel (vol_pack_texel)
     flux: vec4<f32>,   // rgb flux (lm)
 }
 
@@ -74,6 +74,60 @@ const C_IGNORED: u32 = 13u;    // transmissive hits the media rules ignored
 const C_ABSORBED: u32 = 14u;   // non-contributive photons stopped on diffuse surfaces
 const C_LEFT_INSIDE: u32 = 15u; // photons leaving the volume still inside a dielectric (P_med)
 const C_LEFT_INSIDE_LM: u32 = 16u; // f32 bits: their luminous flux
+
+// Density tiles (section 3.4's grid, made adaptive). Each of the 7 sets (the 6 projector faces,
+// then the deposits on the slab texel grid) holds levels of tiles, coarsest first: side
+// T = dims.z texels, then T / 2, T / 4, .. down to 1 texel, each level as large as the larger
+// G-buffer needs. A hit counts in every level; its splat takes the density of the finest tile
+// holding at least `bounds_lo.w` photons (`CausticsVolume::density_photons`).
+fn vol_tile_levels() -> u32 {
+    return firstLeadingBit(max(vp.dims.z, 1u)) + 1u;
+}
+
+fn vol_tile_side(l: u32) -> u32 {
+    return max(vp.dims.z >> l, 1u);
+}
+
+fn vol_tiles_per_row(res: u32, side: u32) -> u32 {
+    return (res + side - 1u) / side;
+}
+
+fn vol_level_words(l: u32) -> u32 {
+    let t = vol_tiles_per_row(max(vp.dims.x, vp.dims.y), vol_tile_side(l));
+    return t * t;
+}
+
+fn vol_set_words() -> u32 {
+    var s = 0u;
+    for (var l = 0u; l < vol_tile_levels(); l += 1u) {
+        s += vol_level_words(l);
+    }
+    return s;
+}
+
+// The tile of `texel` in level `l` of set `set` (set 6, the deposits, on the slab grid).
+fn vol_tile_index(tset: u32, l: u32, texel: vec2<u32>) -> u32 {
+    var o = tset * vol_set_words();
+    for (var m = 0u; m < l; m += 1u) {
+        o += vol_level_words(m);
+    }
+    let side = vol_tile_side(l);
+    let per_row = vol_tiles_per_row(select(vp.dims.y, vp.dims.x, tset == 6u), side);
+    return o + (texel.y / side) * per_row + texel.x / side;
+}
+
+// A hit's set and texel in one word: set in bits 0-2, x in 3-16, y in 17-30.
+fn vol_pack_texel(tset: u32, texel: vec2<u32>) -> u32 {
+    return tset | (min(texel.x, 16383u) << 3u) | (min(texel.y, 16383u) << 17u);
+}
+
+fn vol_unpack_set(code: u32) -> u32 {
+    return code & 7u;
+}
+
+fn vol_unpack_texel(code: u32) -> vec2<u32> {
+    return vec2((code >> 3u) & 16383u, (code >> 17u) & 16383u);
+}
 
 fn vol_axis(i: u32) -> vec3<f32> {
     if i == 0u {

@@ -314,10 +314,19 @@ fn depth(device: &RenderDevice, side: u32) -> TextureView {
         .create_view(&TextureViewDescriptor::default())
 }
 
-/// Density tiles per row of the larger G-buffer, squared (the stride of one tile set).
-pub fn tile_stride(key: &VolumeKey) -> u64 {
-    let t = key.gbuffer.max(key.projector).div_ceil(key.tile.max(1)) as u64;
-    t * t
+/// Counters of one density-tile set (`vol_set_words` in common.wgsl): levels of side
+/// `tile`, `tile / 2`, .. 1 texel, coarsest first, each `(larger G-buffer side / side)²`.
+pub fn tile_set_words(key: &VolumeKey) -> u64 {
+    let res = key.gbuffer.max(key.projector);
+    let mut side = key.tile.max(1);
+    let mut words = 0;
+    loop {
+        words += (res.div_ceil(side) as u64).pow(2);
+        if side == 1 {
+            return words;
+        }
+        side /= 2;
+    }
 }
 
 impl VolumeGpu {
@@ -387,7 +396,7 @@ impl VolumeGpu {
             tiles: storage(
                 device,
                 "caustics:buffer:volume_tiles",
-                7 * tile_stride(&key) * 4,
+                7 * tile_set_words(&key) * 4,
                 BufferUsages::empty(),
             ),
             args: device.create_buffer(&BufferDescriptor {
@@ -455,7 +464,8 @@ impl VolumeGpu {
             fl(v);
         }
         let (lo, hi) = scene.bounds;
-        for v in [lo.x, lo.y, lo.z, 0.0, hi.x, hi.y, hi.z, 0.0] {
+        let k = volume.density_photons.max(1) as f32;
+        for v in [lo.x, lo.y, lo.z, k, hi.x, hi.y, hi.z, 0.0] {
             fl(v);
         }
         queue.write_buffer(&self.params, 0, &b);

@@ -558,24 +558,18 @@ fn cube_hit(c: CubeSample, thickness: f32) -> bool {
     return c.g.valid && c.z >= c.g.depth && c.z - c.g.depth <= thickness;
 }
 
-fn tiles_per_row(res: u32) -> u32 {
-    return (res + vp.dims.z - 1u) / vp.dims.z;
-}
-
-// Tiles of one projector layer (or of the deposits), the same stride for all seven sets.
-fn tile_stride() -> u32 {
-    let t = tiles_per_row(max(vp.dims.x, vp.dims.y));
-    return t * t;
-}
-
-fn record_hit(i: u32, p: VolPhoton, pos: vec3<f32>, n: vec3<f32>, tile: u32, tile_area: f32) {
+// Record photon `i` on its receiver at `texel` of tile set `set` (receiver area `texel_area`
+// m^2), counted in every level of the set's density tiles.
+fn record_hit(i: u32, p: VolPhoton, pos: vec3<f32>, n: vec3<f32>, tset: u32, texel: vec2<u32>, texel_area: f32) {
     var hit: VolHit;
     hit.pos = vec4(pos, p.pos.w);
-    hit.normal = vec4(n, tile_area);
-    hit.dir = vec4(p.dir.xyz, bitcast<f32>(tile));
+    hit.normal = vec4(n, texel_area);
+    hit.dir = vec4(p.dir.xyz, bitcast<f32>(vol_pack_texel(tset, texel)));
     hit.flux = vec4(p.flux.xyz, 0.0);
     hits[i] = hit;
-    atomicAdd(&tiles[tile], 1u);
+    for (var l = 0u; l < vol_tile_levels(); l += 1u) {
+        atomicAdd(&tiles[vol_tile_index(tset, l, texel)], 1u);
+    }
     let lm = dot(p.flux.xyz, vec3(0.2126, 0.7152, 0.0722));
     splatted_lm += select(0.0, lm, abs(lm) <= 3.0e38);
 }
@@ -624,13 +618,11 @@ fn project_photon(g: u32) {
         }
         let q = vol_local(p.pos.xyz);
         let px = vec2<u32>(slab_texel(q));
-        let per_row = tiles_per_row(vp.dims.x);
-        let tile = 6u * tile_stride() + (px.y / vp.dims.z) * per_row + px.x / vp.dims.z;
         let res = f32(vp.dims.x);
         let texel = (2.0 * h[vp.lay.y] / res) * (2.0 * h[vp.lay.z] / res);
         let a = texel / max(abs(dot(p.normal.xyz, vol_axis(vp.lay.x))), 1e-3);
         count(C_HITS);
-        record_hit(i, p, p.pos.xyz, p.normal.xyz, tile, a * f32(vp.dims.z * vp.dims.z));
+        record_hit(i, p, p.pos.xyz, p.normal.xyz, 6u, px, a);
         return;
     }
     if end != 1u + face {
@@ -710,11 +702,8 @@ fn project_photon(g: u32) {
     let ray = normalize(pos - vp.centre.xyz);
     let axis = vol_axis(ai) * select(1.0, -1.0, (c.layer & 1u) != 0u);
     let texel = vol_texel_area(c.z, h[ai], h[ab.x], h[ab.y], vp.dims.y, ray, axis, n);
-    let per_row = tiles_per_row(vp.dims.y);
-    let tx = vec2<u32>(c.texel) / vp.dims.z;
-    let tile = c.layer * tile_stride() + tx.y * per_row + tx.x;
     var q = p;
     q.pos.w += b;
     count(C_HITS);
-    record_hit(i, q, pos, n, tile, texel * f32(vp.dims.z * vp.dims.z));
+    record_hit(i, q, pos, n, c.layer, vec2<u32>(c.texel), texel);
 }

@@ -64,6 +64,25 @@ fn quad_corner(vi: u32) -> vec2<f32> {
     return c[vi % 6u];
 }
 
+// Receiver area per photon around a hit (section 3.4's density estimate, made adaptive): the
+// area of its tile over the photons in it, from the finest level whose tile holds at least
+// `density photons` (bounds_lo.w), else the coarsest. `texel_area`: the hit's texel (m^2).
+fn area_per_photon(code: u32, texel_area: f32) -> f32 {
+    let tset = vol_unpack_set(code);
+    let texel = vol_unpack_texel(code);
+    let want = u32(max(vp.bounds_lo.w, 1.0));
+    let levels = vol_tile_levels();
+    for (var k = 0u; k < levels; k += 1u) {
+        let l = levels - 1u - k;
+        let n = tiles[vol_tile_index(tset, l, texel)];
+        if n >= want || l == 0u {
+            let side = f32(vol_tile_side(l));
+            return texel_area * side * side / f32(max(n, 1u));
+        }
+    }
+    return texel_area;
+}
+
 // Section 3.4: "quads with a circular texture ... adjusted according to the ray length and
 // density estimate", oriented by the receiver normal and the projected direction.
 @vertex
@@ -77,9 +96,7 @@ fn vs_splat(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) ->
     if all(h.flux.xyz == vec3(0.0)) || !vol_finite3(h.pos.xyz) {
         return out;
     }
-    let tile = bitcast<u32>(h.dir.w);
-    let n_tile = max(tiles[tile], 1u);
-    let per_photon = h.normal.w / f32(n_tile);
+    let per_photon = area_per_photon(bitcast<u32>(h.dir.w), h.normal.w);
     let dist = distance(h.pos.xyz, view.eye.xyz);
     // At least a pixel wide, so no splat falls between the pixel centres.
     let r_min = max(0.75 * dist * view.eye.w, 1e-6 * vp.centre.w);

@@ -206,6 +206,7 @@ pub fn prepare_volumes(
             gpu.exit_mask,
             volume.photons,
             volume.splat_overlap.to_bits(),
+            volume.density_photons,
             volume.entry,
             volume.progressive,
         ));
