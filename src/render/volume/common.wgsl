@@ -105,7 +105,7 @@ fn vol_set_words() -> u32 {
     return s;
 }
 
-// The tile of `texel` in level `l` of set `set` (set 6, the deposits, on the slab grid).
+// The tile of `texel` in level `l` of set `tset` (set 6, the deposits, on the slab grid).
 fn vol_tile_index(tset: u32, l: u32, texel: vec2<u32>) -> u32 {
     var o = tset * vol_set_words();
     for (var m = 0u; m < l; m += 1u) {

@@ -329,6 +329,11 @@ pub fn tile_set_words(key: &VolumeKey) -> u64 {
     }
 }
 
+/// Bytes of the density tiles: 7 sets (6 projector faces and the deposits) of u32 counters.
+pub fn tile_bytes(key: &VolumeKey) -> u64 {
+    7 * tile_set_words(key) * 4
+}
+
 impl VolumeGpu {
     /// Allocate everything for `key`.
     pub fn new(device: &RenderDevice, entity: Entity, key: VolumeKey, frame: VolumeFrame) -> Self {
@@ -396,7 +401,7 @@ impl VolumeGpu {
             tiles: storage(
                 device,
                 "caustics:buffer:volume_tiles",
-                7 * tile_set_words(&key) * 4,
+                tile_bytes(&key),
                 BufferUsages::empty(),
             ),
             args: device.create_buffer(&BufferDescriptor {

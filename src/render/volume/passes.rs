@@ -18,7 +18,7 @@ use bevy::render::render_resource::{
 };
 use bevy::render::renderer::{RenderContext, ViewQuery};
 
-use super::gpu::{CNT, PROBE_STRIDE, VolumeGpu, tile_set_words};
+use super::gpu::{CNT, PROBE_STRIDE, VolumeGpu, tile_bytes};
 use super::pipelines::VolumePipelines;
 use super::view::{VolumeStore, VolumeViewFrame, VolumeViewState};
 use crate::render::span::SpanSettle;
@@ -309,7 +309,7 @@ fn update_volume(
         // recounted (a later progressive batch adds to them).
         let encoder = ctx.command_encoder();
         encoder.clear_buffer(&v.hits, 0, None);
-        encoder.clear_buffer(&v.tiles, 0, Some(7 * tile_set_words(&v.key) * 4));
+        encoder.clear_buffer(&v.tiles, 0, Some(tile_bytes(&v.key)));
         encoder.clear_buffer(&v.counts, (CNT + 1) * 4, Some(4 * 4));
     }
     let diagnostics = ctx.diagnostic_recorder();

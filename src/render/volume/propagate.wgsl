@@ -558,7 +558,7 @@ fn cube_hit(c: CubeSample, thickness: f32) -> bool {
     return c.g.valid && c.z >= c.g.depth && c.z - c.g.depth <= thickness;
 }
 
-// Record photon `i` on its receiver at `texel` of tile set `set` (receiver area `texel_area`
+// Record photon `i` on its receiver at `texel` of tile set `tset` (receiver area `texel_area`
 // m^2), counted in every level of the set's density tiles.
 fn record_hit(i: u32, p: VolPhoton, pos: vec3<f32>, n: vec3<f32>, tset: u32, texel: vec2<u32>, texel_area: f32) {
     var hit: VolHit;
