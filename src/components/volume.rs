@@ -175,6 +175,68 @@ impl CausticsVolume {
     }
 }
 
+impl CausticsVolume {
+    /// A volume around casters for a point or spot light at `light` (see [`Self::fit`]): the
+    /// light must lie beyond the entry face, over it (its foot on the face), or none of its light
+    /// enters. The box faces the light when that holds (a light far from the casters); when
+    /// it does not (a bulb beside or over a wide caster), the casters' world box with the face
+    /// over which the light stands as entry. `None` when the light lies inside the casters'
+    /// box grown by `margin`: no volume around them can take its light.
+    pub fn fit_point(casters: (Vec3, Vec3), light: Vec3, margin: f32) -> Option<(Self, Transform)> {
+        let centre = (casters.0 + casters.1) * 0.5;
+        let towards = (light - centre).try_normalize().unwrap_or(Vec3::Y);
+        let mut axes = [
+            Vec3::X,
+            Vec3::NEG_X,
+            Vec3::Y,
+            Vec3::NEG_Y,
+            Vec3::Z,
+            Vec3::NEG_Z,
+        ];
+        axes.sort_by(|a, b| b.dot(towards).total_cmp(&a.dot(towards)));
+        // The entry turned from the light towards each axis by a third, two thirds, all the
+        // way: the least turn that leaves the light over the entry wins (a box turned only
+        // part way still sees walls that an axis-aligned one would see edge on).
+        let turned = [1.0 / 3.0, 2.0 / 3.0, 1.0].into_iter().flat_map(move |f| {
+            axes.into_iter()
+                .filter_map(move |a| towards.lerp(a, f).try_normalize())
+        });
+        std::iter::once(towards)
+            .chain(turned)
+            .map(|n| Self::fit_entry_tight(casters, n, margin))
+            .find(|(v, t)| v.light_over_entry(t, light))
+    }
+
+    /// [`Self::fit`] with the entry face's outward normal `n`, the box moved away from the
+    /// entry so that face lies at the casters' margin: `fit`'s floor of a quarter of the
+    /// largest extent grows the box on the far side only (a bulb just over a flat caster stays
+    /// over the entry face).
+    fn fit_entry_tight(casters: (Vec3, Vec3), n: Vec3, margin: f32) -> (Self, Transform) {
+        let (v, mut t) = Self::fit(casters, -n, margin);
+        let up = t.rotation * Vec3::Y;
+        let (lo, hi) = (casters.0.min(casters.1), casters.0.max(casters.1));
+        let reach = (hi - lo).abs().dot(up.abs()) * 0.5;
+        let tight = reach * (1.0 + margin.max(0.0)) + 1e-3;
+        let slack = v.size.y * 0.5 - tight;
+        if slack.is_finite() && slack > 0.0 {
+            t.translation -= up * slack;
+        }
+        (v, t)
+    }
+
+    /// `light` lies beyond this volume's entry face and over it: every ray from it into the box
+    /// crosses the entry face first.
+    pub fn light_over_entry(&self, transform: &Transform, light: Vec3) -> bool {
+        let local = transform.compute_affine().inverse().transform_point3(light);
+        let n = self.entry.normal();
+        let half = self.size * 0.5;
+        let beyond = local.dot(n) > half.dot(n.abs());
+        let across = (local - n * local.dot(n)).abs();
+        let face = half - half * n.abs();
+        beyond && across.cmple(face + Vec3::splat(1e-6)).all()
+    }
+}
+
 /// A face of a volume's box, by the local axis of its outward normal.
 #[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum VolumeFace {

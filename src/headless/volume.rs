@@ -56,15 +56,23 @@ pub(crate) fn fit_volumes(
         fitted.0 = true;
         return;
     };
-    let centre = (bounds.0 + bounds.1) * 0.5;
-    for (_, light) in &scene.lights {
-        let travel = match *light {
-            TraceLight::Directional { direction, .. } => direction,
+    for (entity, light) in &scene.lights {
+        let fit = match *light {
+            TraceLight::Directional { direction, .. } => {
+                Some(CausticsVolume::fit(bounds, direction, 0.1))
+            }
             TraceLight::Point { position, .. } | TraceLight::Spot { position, .. } => {
-                centre - position
+                CausticsVolume::fit_point(bounds, position, 0.1)
             }
         };
-        let (mut v, t) = CausticsVolume::fit(bounds, travel, 0.1);
+        let Some((mut v, t)) = fit else {
+            warn!(
+                "caustics volume: light {entity} lies inside the casters' bounds, so no volume \
+                 around them can take its light through an entry face; none fitted for it \
+                 (AAPS or the photon map follow light from anywhere)"
+            );
+            continue;
+        };
         apply_template(&mut v, &template.1);
         commands.spawn((v, t, Name::new("caustics volume (fitted)")));
     }

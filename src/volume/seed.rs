@@ -133,6 +133,30 @@ pub fn seed_photons(
     out
 }
 
+/// The lights (indices into `lights`) that shine but none of whose light enters through the
+/// entry face: all their photons of `seed_photons(.., lights, ..)` carry zero flux (a point or
+/// spot light behind the face's plane, inside the box; a spot turned away; a sun travelling
+/// out of the face).
+pub fn lights_shut_out(photons: &[VolumePhoton], lights: &[TraceLight]) -> Vec<usize> {
+    if lights.is_empty() || photons.is_empty() {
+        return Vec::new();
+    }
+    let per_light = photons.len() / lights.len();
+    lights
+        .iter()
+        .enumerate()
+        .filter(|(i, light)| {
+            let power = match **light {
+                TraceLight::Directional { illuminance, .. } => illuminance,
+                TraceLight::Point { flux, .. } | TraceLight::Spot { flux, .. } => flux,
+            };
+            let own = &photons[i * per_light..(i + 1) * per_light];
+            power.max_element() > 0.0 && own.iter().all(|p| p.flux == Vec3::ZERO)
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
 /// Direction from a point or spot light at `position` to `p`, and the irradiance it gives the
 /// face of normal `n` there: `Φ / 4π · falloff · cos θ / r²`.
 fn point_irradiance(p: Vec3, n: Vec3, position: Vec3, flux: Vec3, falloff: f32) -> (Vec3, Vec3) {

@@ -54,6 +54,8 @@ pub struct VolumeScene {
     pub scale: f32,
     /// The caustic lights.
     pub lights: Vec<crate::scene::TraceLight>,
+    /// Their main-world entities, in the same order.
+    pub light_entities: Vec<Entity>,
     /// Their signature (a light change re-runs every slab).
     pub light_sig: u64,
 }
@@ -132,6 +134,7 @@ impl VolumeScene {
             bounds: (lo, hi),
             scale: (hi - lo).max_element().max(1e-3),
             lights: scene.lights.iter().map(|(_, l)| *l).collect(),
+            light_entities: scene.lights.iter().map(|(e, _)| *e).collect(),
             light_sig: debug_hash(&scene.lights.iter().map(|(_, l)| *l).collect::<Vec<_>>()),
         }
     }
@@ -545,7 +548,7 @@ impl VolumeGpu {
         world_from_volume: &Affine3A,
         volume: &CausticsVolume,
         lights: &[crate::scene::TraceLight],
-    ) {
+    ) -> Vec<usize> {
         let photons = seed_photons(
             world_from_volume,
             volume.size,
@@ -599,6 +602,7 @@ impl VolumeGpu {
         counts[at..at + 4].copy_from_slice(&entered.to_le_bytes());
         queue.write_buffer(&self.counts, 0, &counts);
         self.seeded = (photons.len() as u32, live.len() as u32);
+        crate::volume::lights_shut_out(&photons, lights)
     }
 }
 

@@ -33,6 +33,8 @@ pub struct VolumeStore {
     pub scene: Option<VolumeScene>,
     /// The view that runs this frame's updates (the first caustics-volume view).
     pub updater: Option<Entity>,
+    /// (volume, light) pairs already warned about: the light's photons cannot enter.
+    pub shut_out_warned: Vec<(Entity, Entity)>,
 }
 
 /// Per-view state of the `Volume` technique.
@@ -167,6 +169,7 @@ pub fn prepare_volumes(
     let mut next: Vec<VolumeGpu> = Vec::new();
     let mut old: Vec<VolumeGpu> = std::mem::take(&mut store.volumes);
     let vs = store.scene.as_ref().unwrap();
+    let mut shut_out = Vec::new();
     for (entity, volume, affine) in volumes {
         if volume.photons <= 0 {
             continue;
@@ -236,7 +239,9 @@ pub fn prepare_volumes(
         };
         if first_change == Some(0) && (sig.volume != gpu.sig.volume || sig.lights != gpu.sig.lights)
         {
-            gpu.seed(&queue, affine, volume, &vs.lights);
+            for i in gpu.seed(&queue, affine, volume, &vs.lights) {
+                shut_out.push((*entity, vs.light_entities[i], volume.entry));
+            }
         }
         if let Some(k) = first_change {
             gpu.change = Some(gpu.change.map_or(k, |p| p.min(k)));
@@ -252,6 +257,17 @@ pub fn prepare_volumes(
         next.push(gpu);
     }
     store.volumes = next;
+    for (volume, light, entry) in shut_out {
+        if !store.shut_out_warned.contains(&(volume, light)) {
+            warn!(
+                "caustics volume {volume}: none of light {light}'s light enters through its entry \
+                 face {entry:?} (the light is behind that face's plane, inside the box, or turned \
+                 away); place the volume so the light stands over its entry face \
+                 (CausticsVolume::fit_point), or use AAPS"
+            );
+            store.shut_out_warned.push((volume, light));
+        }
+    }
     store.updater = cams.first().map(|c| c.0);
 
     for (entity, caustics, camera, _, state) in &mut views {
