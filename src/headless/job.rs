@@ -11,11 +11,10 @@ use bevy::diagnostic::{DiagnosticsStore, FrameCount};
 use bevy::light::{DirectionalLight, PointLight, SpotLight};
 use bevy::pbr::DefaultOpaqueRendererMethod;
 use bevy::prelude::*;
+use bevy::render::RenderPlugin;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
-use bevy::render::renderer::RenderAdapterInfo;
-use bevy::render::{RenderApp, RenderPlugin, RenderStartup};
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
 
@@ -154,7 +153,7 @@ pub(super) struct Shared(pub(super) Arc<Mutex<Outcome>>);
 #[derive(Default)]
 pub(super) struct Outcome {
     pub(super) error: Option<String>,
-    report: RenderReport,
+    pub(super) report: RenderReport,
     twin_raw: Vec<u8>,
     snapshot: Option<crate::render::readback::CausticsSnapshot>,
     finished: bool,
@@ -284,18 +283,7 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     if job.mark_lights {
         app.add_systems(Update, crate::mark_every_light);
     }
-    if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
-        let s = shared.clone();
-        render_app.add_systems(RenderStartup, move |info: Res<RenderAdapterInfo>| {
-            if let Ok(mut o) = s.0.lock() {
-                o.report.adapter = format!("{} ({:?})", info.name, info.backend);
-                o.report.driver = format!(
-                    "{} {} ({:?})",
-                    info.driver, info.driver_info, info.device_type
-                );
-            }
-        });
-    }
+    super::render_watch::watch_render_world(&mut app, &shared);
     app.run();
     let mut o = shared
         .0
@@ -427,6 +415,10 @@ fn drive(
         }
         exit.write(AppExit::error());
     };
+    if shared.0.lock().is_ok_and(|o| o.error.is_some()) {
+        exit.write(AppExit::error()); // set by the render world: a pipeline that failed
+        return;
+    }
     match *phase {
         Phase::Loading => match scene_loaded(&assets, &handles, &job.0, frames.0) {
             Err(msg) => fail(msg, &mut exit),

@@ -10,6 +10,7 @@ mod counters;
 mod job;
 mod load_error;
 pub mod motion;
+mod render_watch;
 mod report;
 mod stage;
 mod volume;

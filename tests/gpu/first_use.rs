@@ -457,3 +457,48 @@ fn jpeg_textured_gltf_loads_in_the_cli() {
         "no green texture on the floor: {mean:?}"
     );
 }
+
+/// A shader that does not compile fails the render with one line naming the pipeline (it
+/// rendered on without it, and the command line exited 0 with empty caustics): the hook
+/// breaks every AAPS shader as a WGSL error in our code would (`set` is a reserved word).
+#[test]
+fn a_shader_that_does_not_compile_fails_the_render() {
+    let _g = GPU.slot();
+    if !require_gpu() {
+        return;
+    }
+    fn break_aaps_shaders(world: &mut bevy::prelude::World) {
+        use bevy::shader::{Shader, Source};
+        let mut shaders = world.resource_mut::<bevy::prelude::Assets<Shader>>();
+        let ours: Vec<_> = shaders
+            .iter()
+            .filter(|(_, s)| s.path.contains("aaps"))
+            .map(|(id, _)| id)
+            .collect();
+        assert!(!ours.is_empty(), "no AAPS shader to break");
+        for id in ours {
+            let mut shader = shaders.get_mut(id).unwrap();
+            if let Source::Wgsl(code) = &mut shader.source {
+                *code =
+                    format!("{code}\nfn broken() -> u32 {{ let set = 1u; return set; }}\n").into();
+            }
+        }
+    }
+    let job = RenderJob {
+        technique: bevy_caustics::CausticsTechnique::Aaps,
+        width: 32,
+        height: 32,
+        hook: Some(break_aaps_shaders),
+        ..glass_sphere_job(true)
+    };
+    let Err(e) = run(job) else {
+        panic!("the render succeeded without its AAPS pipelines");
+    };
+    println!("{e}");
+    assert!(
+        e.contains("could not be built") && e.contains("aaps"),
+        "{e}"
+    );
+    assert!(e.contains("reserved"), "the compiler's message: {e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+}
