@@ -97,6 +97,13 @@ pub struct CausticsVolume {
     /// update); a value at least `photons` is the same as off. Cost per frame: linear in it.
     #[reflect(@0_u32..=16_777_216_u32)]
     pub progressive: u32,
+    /// The one light this volume carries. Default `None`: every caustic light, the photon
+    /// pool split equally between them (seed 000 section 3.4). A volume turned to one light
+    /// ([`Self::fit`], [`Self::fit_point`]) should carry that light only: another light's rays
+    /// enter through other faces, and a second volume around the same casters would count
+    /// every light twice (the CLI fits one volume per light, each with its light here). A
+    /// light that is not a caustic light leaves the volume dark, with a warning.
+    pub light: Option<Entity>,
 }
 
 impl Default for CausticsVolume {
@@ -118,6 +125,7 @@ impl Default for CausticsVolume {
             differential: true,
             frustum_cull: false,
             progressive: 0,
+            light: None,
         }
     }
 }

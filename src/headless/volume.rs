@@ -74,6 +74,7 @@ pub(crate) fn fit_volumes(
             continue;
         };
         apply_template(&mut v, &template.1);
+        v.light = Some(*entity);
         commands.spawn((v, t, Name::new("caustics volume (fitted)")));
     }
     fitted.0 = true;

@@ -18,6 +18,7 @@ use super::gpu::{
 use crate::components::{CausticsTechnique, CausticsVolume};
 use crate::render::ExtractedCaustics;
 use crate::render::trace::scene::ExtractedCausticsScene;
+use crate::scene::TraceLight;
 use crate::volume::{VolumeFrame, schedule_run};
 
 /// The main world's volumes (entity, settings, world from volume).
@@ -212,6 +213,7 @@ pub fn prepare_volumes(
             volume.density_photons,
             volume.entry,
             volume.progressive,
+            volume.light,
         ));
         // The per-slab hashes walk every instance: only when the scene or the volume changed.
         let slab_sigs = if volume_sig == gpu.sig.volume && scene.generation == gpu.sig.generation {
@@ -239,8 +241,17 @@ pub fn prepare_volumes(
         };
         if first_change == Some(0) && (sig.volume != gpu.sig.volume || sig.lights != gpu.sig.lights)
         {
-            for i in gpu.seed(&queue, affine, volume, &vs.lights) {
-                shut_out.push((*entity, vs.light_entities[i], volume.entry));
+            let (ids, lights): (Vec<Entity>, Vec<TraceLight>) = vs
+                .light_entities
+                .iter()
+                .zip(&vs.lights)
+                .filter(|(e, _)| volume.light.is_none_or(|l| l == **e))
+                .unzip();
+            if let Some(l) = volume.light.filter(|_| lights.is_empty()) {
+                shut_out.push((*entity, l, None));
+            }
+            for i in gpu.seed(&queue, affine, volume, &lights) {
+                shut_out.push((*entity, ids[i], Some(volume.entry)));
             }
         }
         if let Some(k) = first_change {
@@ -258,15 +269,23 @@ pub fn prepare_volumes(
     }
     store.volumes = next;
     for (volume, light, entry) in shut_out {
-        if !store.shut_out_warned.contains(&(volume, light)) {
-            warn!(
-                "caustics volume {volume}: none of light {light}'s light enters through its entry \
-                 face {entry:?} (the light is behind that face's plane, inside the box, or turned \
-                 away); place the volume so the light stands over its entry face \
-                 (CausticsVolume::fit_point), or use AAPS"
-            );
-            store.shut_out_warned.push((volume, light));
+        if store.shut_out_warned.contains(&(volume, light)) {
+            continue;
         }
+        store.shut_out_warned.push((volume, light));
+        let Some(entry) = entry else {
+            warn!(
+                "caustics volume {volume}: CausticsVolume::light is {light}, which is not a \
+                 caustic light (no CausticLight, or gone): the volume carries no light"
+            );
+            continue;
+        };
+        warn!(
+            "caustics volume {volume}: none of light {light}'s light enters through its entry \
+             face {entry:?} (the light is behind that face's plane, inside the box, or turned \
+             away); place the volume so the light stands over its entry face \
+             (CausticsVolume::fit_point), or use AAPS"
+        );
     }
     store.updater = cams.first().map(|c| c.0);
 
