@@ -53,6 +53,7 @@ impl GpuSlots {
     }
 
     fn take(&self, n: usize) -> GpuSlot<'_> {
+        let asked = std::time::Instant::now();
         let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let all = n == self.total;
         if all {
@@ -65,10 +66,26 @@ impl GpuSlots {
         if all {
             state.1 -= 1;
         }
+        drop(state);
+        report_wait(n, asked.elapsed());
         GpuSlot {
             slots: self,
             taken: n,
         }
+    }
+}
+
+/// A wait of over a second, written to the process's stderr past libtest's capture (CI's log
+/// shows where the two slots stood idle): the test, the slots it asked for, and the seconds.
+fn report_wait(n: usize, waited: std::time::Duration) {
+    use std::io::Write;
+    if waited.as_secs_f64() > 1.0 {
+        let test = std::thread::current().name().unwrap_or("?").to_string();
+        let line = format!(
+            "gpu slots: {test} waited {:.1} s for {n} slot(s)\n",
+            waited.as_secs_f64()
+        );
+        let _ = std::io::stderr().write_all(line.as_bytes());
     }
 }
 
