@@ -15,7 +15,7 @@ use glam::Affine3A;
 use super::gpu::{
     Signatures, VolumeGpu, VolumeKey, VolumeScene, debug_hash, exit_mask, slab_signatures,
 };
-use crate::components::{CausticsTechnique, CausticsVolume};
+use crate::components::{CausticsTechnique, CausticsVolume, VolumeFace};
 use crate::render::ExtractedCaustics;
 use crate::render::trace::scene::ExtractedCausticsScene;
 use crate::scene::TraceLight;
@@ -241,12 +241,7 @@ pub fn prepare_volumes(
         };
         if first_change == Some(0) && (sig.volume != gpu.sig.volume || sig.lights != gpu.sig.lights)
         {
-            let (ids, lights): (Vec<Entity>, Vec<TraceLight>) = vs
-                .light_entities
-                .iter()
-                .zip(&vs.lights)
-                .filter(|(e, _)| volume.light.is_none_or(|l| l == **e))
-                .unzip();
+            let (ids, lights) = carried_lights(vs, volume);
             if let Some(l) = volume.light.filter(|_| lights.is_empty()) {
                 shut_out.push((*entity, l, None));
             }
@@ -268,25 +263,7 @@ pub fn prepare_volumes(
         next.push(gpu);
     }
     store.volumes = next;
-    for (volume, light, entry) in shut_out {
-        if store.shut_out_warned.contains(&(volume, light)) {
-            continue;
-        }
-        store.shut_out_warned.push((volume, light));
-        let Some(entry) = entry else {
-            warn!(
-                "caustics volume {volume}: CausticsVolume::light is {light}, which is not a \
-                 caustic light (no CausticLight, or gone): the volume carries no light"
-            );
-            continue;
-        };
-        warn!(
-            "caustics volume {volume}: none of light {light}'s light enters through its entry \
-             face {entry:?} (the light is behind that face's plane, inside the box, or turned \
-             away); place the volume so the light stands over its entry face \
-             (CausticsVolume::fit_point), or use AAPS"
-        );
-    }
+    warn_shut_out(&mut store.shut_out_warned, shut_out);
     store.updater = cams.first().map(|c| c.0);
 
     for (entity, caustics, camera, _, state) in &mut views {
@@ -335,6 +312,43 @@ pub fn prepare_volumes(
             e.insert(s);
         }
         e.insert(VolumeViewFrame);
+    }
+}
+
+/// The lights `volume` carries (all of them, or its [`CausticsVolume::light`]) and their
+/// entities.
+fn carried_lights(vs: &VolumeScene, volume: &CausticsVolume) -> (Vec<Entity>, Vec<TraceLight>) {
+    vs.light_entities
+        .iter()
+        .zip(&vs.lights)
+        .filter(|(e, _)| volume.light.is_none_or(|l| l == **e))
+        .unzip()
+}
+
+/// One warning per (volume, light) whose light cannot enter the volume: its entry face (none:
+/// the volume's `light` is no caustic light).
+fn warn_shut_out(
+    warned: &mut Vec<(Entity, Entity)>,
+    shut_out: Vec<(Entity, Entity, Option<VolumeFace>)>,
+) {
+    for (volume, light, entry) in shut_out {
+        if warned.contains(&(volume, light)) {
+            continue;
+        }
+        warned.push((volume, light));
+        let Some(entry) = entry else {
+            warn!(
+                "caustics volume {volume}: CausticsVolume::light is {light}, which is not a \
+                 caustic light (no CausticLight, or gone): the volume carries no light"
+            );
+            continue;
+        };
+        warn!(
+            "caustics volume {volume}: none of light {light}'s light enters through its entry \
+             face {entry:?} (the light is behind that face's plane, inside the box, or turned \
+             away); place the volume so the light stands over its entry face \
+             (CausticsVolume::fit_point), or use AAPS"
+        );
     }
 }
 
