@@ -187,9 +187,12 @@ impl CausticsVolume {
     /// A volume around casters for a point or spot light at `light` (see [`Self::fit`]): the
     /// light must lie beyond the entry face, over it (its foot on the face), or none of its light
     /// enters. The box faces the light when that holds (a light far from the casters); when
-    /// it does not (a bulb beside or over a wide caster), the casters' world box with the face
-    /// over which the light stands as entry. `None` when the light lies inside the casters'
-    /// box grown by `margin`: no volume around them can take its light.
+    /// it does not (a bulb beside or over a wide caster), its entry is turned from the light
+    /// towards a world axis by a third, two thirds or all the way, the least turn for which
+    /// it holds (the `ring` scene's bulb: two thirds towards +Y). In every case the entry face
+    /// lies at the casters' margin and `fit`'s floor on the extents grows the box away from
+    /// the light. `None` when no such box exists (the light inside the casters' box grown by
+    /// `margin`).
     pub fn fit_point(casters: (Vec3, Vec3), light: Vec3, margin: f32) -> Option<(Self, Transform)> {
         let centre = (casters.0 + casters.1) * 0.5;
         let towards = (light - centre).try_normalize().unwrap_or(Vec3::Y);
