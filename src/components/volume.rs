@@ -181,9 +181,7 @@ impl CausticsVolume {
             },
         )
     }
-}
 
-impl CausticsVolume {
     /// A volume around casters for a point or spot light at `light` (see [`Self::fit`]): the
     /// light must lie beyond the entry face, over it (its foot on the face), or none of its light
     /// enters. The box faces the light when that holds (a light far from the casters); when
@@ -196,14 +194,7 @@ impl CausticsVolume {
     pub fn fit_point(casters: (Vec3, Vec3), light: Vec3, margin: f32) -> Option<(Self, Transform)> {
         let centre = (casters.0 + casters.1) * 0.5;
         let towards = (light - centre).try_normalize().unwrap_or(Vec3::Y);
-        let mut axes = [
-            Vec3::X,
-            Vec3::NEG_X,
-            Vec3::Y,
-            Vec3::NEG_Y,
-            Vec3::Z,
-            Vec3::NEG_Z,
-        ];
+        let mut axes = VolumeFace::ALL.map(VolumeFace::normal);
         axes.sort_by(|a, b| b.dot(towards).total_cmp(&a.dot(towards)));
         // The entry turned from the light towards each axis by a third, two thirds, all the
         // way: the least turn that leaves the light over the entry wins (a box turned only
