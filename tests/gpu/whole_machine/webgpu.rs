@@ -10,7 +10,7 @@ use bevy::render::settings::WgpuFeatures;
 use bevy_caustics::headless::{RenderJob, RenderReport, run};
 use bevy_caustics::{Caustics, CausticsTechnique as T};
 
-use super::{GPU, require_gpu, scene};
+use crate::{GPU, require_gpu, scene};
 
 /// The techniques in the order one run switches through them (volumes first: the job fits
 /// their volumes when it starts on them).

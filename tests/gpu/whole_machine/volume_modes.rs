@@ -8,7 +8,7 @@ use bevy_caustics::volume::{VolumeGizmoKind, volume_gizmo_segments};
 use bevy_caustics::{CausticsTechnique, CausticsVolume, CausticsVolumeGizmos, scenes};
 use glam::{Affine3A, Vec3};
 
-use super::{GPU, require_gpu, scene};
+use crate::{GPU, require_gpu, scene};
 
 fn glass_sphere(
     frames: u32,

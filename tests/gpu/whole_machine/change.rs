@@ -10,7 +10,7 @@ use bevy::prelude::*;
 use bevy_caustics::headless::{RenderJob, run};
 use bevy_caustics::{Caustics, CausticsTechnique as T, PhotonMapSettings};
 
-use super::{GPU, require_gpu, scene};
+use crate::{GPU, require_gpu, scene};
 
 /// The frames of the changes, in this order (each followed by still frames).
 const EVENTS: [(u32, &str); 5] = [
