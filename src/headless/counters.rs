@@ -136,6 +136,11 @@ pub struct ImageSpaceCounters {
     /// `internal_events` reflections, or crossing a silhouette (or another caster's layers)
     /// where the light's caster layers cannot tell where they meet the glass.
     pub trapped: u64,
+    /// Reflections off a further mirror after a reflection off a caster's outside (the light's
+    /// caster-front layer marched; at most 4 per photon).
+    pub mirror_chain: u64,
+    /// Photons that met a fifth mirror in such a chain (dropped).
+    pub mirror_cap: u64,
 }
 
 impl ImageSpaceCounters {
@@ -160,6 +165,8 @@ impl ImageSpaceCounters {
             landed_inside: c(14),
             direct_hits: c(15),
             trapped: c(16),
+            mirror_chain: c(17),
+            mirror_cap: c(18),
         }
     }
 }

@@ -7,6 +7,7 @@ pub mod collect;
 pub mod forward;
 pub mod gpu;
 pub mod model;
+pub mod shape;
 
 pub use bvh::{Blas, Hit, Instance, MeshGeometry, Tlas};
 pub use collect::{CausticsScene, ScenePlugin};

@@ -176,3 +176,72 @@ fn rsm_views_cover_the_casters() {
     );
     assert_eq!(face.view.eye, Vec4::new(0.0, 0.0, 0.0, face.view.eye.w));
 }
+
+/// Which casters make image space follow a further mirror (`TRACE_CASTER_CHAINS`): a ray
+/// reflected off a flat or a closed convex mesh (a capped cylinder, a gem) cannot meet it
+/// again; off a ring, an open bowl, a torus or a wavy height field it can; a mesh too large
+/// to test answers "can".
+#[test]
+fn caster_shapes_that_reflect_onto_themselves() {
+    use bevy_caustics::scene::bvh::MeshGeometry;
+    use bevy_caustics::scenes::geometry as g;
+    let cases: [(&str, MeshGeometry, bool); 9] = [
+        ("quad", g::quad(1.0, 1.0), false),
+        ("cuboid", g::cuboid(Vec3::new(1.0, 0.1, 2.0)), false),
+        ("uv sphere", g::uv_sphere(0.5, 32, 16), false),
+        (
+            "brilliant (flat facets, split vertices)",
+            g::brilliant(1.0),
+            false,
+        ),
+        ("ring", g::ring(1.0, 0.25, 256), true),
+        ("capped cylinder", g::cylinder(1.0, 0.5, 64), false),
+        ("torus", g::torus(1.0, 0.25, 32, 16), true),
+        (
+            "wavy height field",
+            g::height_field(
+                2.0,
+                16,
+                |x, z| 0.1 * (3.0 * x).sin() * z.cos(),
+                |_, _| glam::Vec2::ZERO,
+            ),
+            true,
+        ),
+        (
+            "flat height field",
+            g::height_field(2.0, 16, |_, _| 0.0, |_, _| glam::Vec2::ZERO),
+            false,
+        ),
+    ];
+    for (name, mesh, expected) in cases {
+        assert_eq!(mesh.reflects_onto_itself(), expected, "{name}");
+    }
+    // An open bowl (half a sphere): every vertex behind every facet's plane, but open.
+    let mut bowl = g::uv_sphere(0.5, 32, 16);
+    let keep: Vec<[u32; 3]> = bowl
+        .indices
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&i| bowl.positions[i as usize].y <= 1e-4))
+        .collect();
+    bowl.indices = keep;
+    assert!(bowl.reflects_onto_itself(), "open bowl");
+    // Too large to test (2^24 plane tests): answered "can", never a long wait.
+    let big = g::uv_sphere(0.5, 512, 256);
+    let t0 = std::time::Instant::now();
+    assert!(big.reflects_onto_itself(), "large sphere");
+    println!("large sphere answered in {:?}", t0.elapsed());
+    // Degenerate input: no triangles, a point, NaN positions.
+    let empty = MeshGeometry {
+        positions: vec![],
+        normals: None,
+        indices: vec![],
+    };
+    assert!(!empty.reflects_onto_itself());
+    let nan = MeshGeometry {
+        positions: vec![Vec3::NAN; 3],
+        normals: None,
+        indices: vec![[0, 1, 2]],
+    };
+    assert!(!nan.reflects_onto_itself());
+}

@@ -58,7 +58,7 @@ pub const ALL_PASSES: [&str; 9] = [
 
 /// Counters read into diagnostics (`render/caustics/image_space/<name>`), by word (`C_*` in
 /// trace.wgsl).
-pub const IMAGE_SPACE_COUNTERS: [(&str, u64); 17] = [
+pub const IMAGE_SPACE_COUNTERS: [(&str, u64); 19] = [
     ("caustics/image_space/emitted", 0),
     ("caustics/image_space/empty", 1),
     ("caustics/image_space/dim", 2),
@@ -76,6 +76,8 @@ pub const IMAGE_SPACE_COUNTERS: [(&str, u64); 17] = [
     ("caustics/image_space/inside", 14),
     ("caustics/image_space/direct", 15),
     ("caustics/image_space/trapped", 16),
+    ("caustics/image_space/mirror_chain", 17),
+    ("caustics/image_space/mirror_cap", 18),
 ];
 
 /// The textures of one compute pass: four sampled inputs, three storage outputs.

@@ -191,8 +191,9 @@ pub(crate) fn queue_image_space_trace_variant(
         });
 }
 
-/// The trace variant for `scene`: its dielectrics (the light kinds share one code path), or
-/// everything when specialisation is off.
+/// The trace variant for `scene`: its dielectrics and whether a reflected photon may meet a
+/// caster again (the light kinds share one code path), or everything when specialisation is
+/// off.
 pub fn trace_features(
     scene: &super::view::ImageSpaceScene,
     specialization: Option<&crate::render::trace::TraceSpecialization>,
@@ -203,6 +204,7 @@ pub fn trace_features(
         crate::render::trace::TraceFeatures {
             dielectrics: scene.dielectrics,
             point_lights: true,
+            caster_chains: scene.mirror_chains,
         }
     }
 }

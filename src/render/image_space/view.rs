@@ -2,6 +2,8 @@
 //! (rebuilt per scene generation), and per view the RSM array, the photon map, the
 //! denoiser's textures and the uniforms of the frame.
 
+use std::sync::Arc;
+
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::render_resource::{
@@ -14,9 +16,11 @@ use bevy::render::view::ExtractedView;
 use super::pipelines::{RSM_DEPTH_FORMAT, RSM_FORMAT};
 use crate::components::{CausticsTechnique, ImageSpaceSettings};
 use crate::render::temporal::TemporalAccumulation;
+
 use crate::render::trace::scene::{ExtractedCausticsScene, GpuLight, caster_sphere, gpu_lights};
 use crate::render::volume::gpu::VolumeScene;
 use crate::render::{ExtractedCaustics, view_texture};
+use crate::scene::bvh::MeshGeometry;
 
 pub use super::rsm_view::{MAX_CONE_HALF_ANGLE, RsmLight, rsm_light, rsm_sources};
 
@@ -151,6 +155,11 @@ pub struct ImageSpaceScene {
     pub bounds: (Vec3, f32),
     /// Some caster is a dielectric (the trace's variant, `render::trace::TraceFeatures`).
     pub dielectrics: bool,
+    /// A reflected photon may meet a caster again: two casters or more, or one whose shape
+    /// reflects onto itself ([`crate::scene::bvh::MeshGeometry::reflects_onto_itself`]; a
+    /// ring, not a ball or a wall). The trace variant then marches the casters' front layer
+    /// after a reflection (`render::trace::TraceFeatures::caster_chains`).
+    pub mirror_chains: bool,
 }
 
 /// Build [`ImageSpaceScene`] when the gathered scene changes and a camera uses the technique;
@@ -162,6 +171,7 @@ pub fn prepare_image_space_scene(
     current: Option<Res<ImageSpaceScene>>,
     views: Query<&ExtractedCaustics>,
     mut idle: Local<Option<u64>>,
+    mut shapes: Local<ShapeCache>,
 ) {
     let wanted = views
         .iter()
@@ -206,8 +216,35 @@ pub fn prepare_image_space_scene(
             .instances
             .iter()
             .any(|i| matches!(i.surface, crate::scene::Surface::Dielectric { .. })),
+        mirror_chains: mirror_chains(tlas, &mut shapes),
     });
     *idle = None;
+}
+
+/// The last single caster's mesh and its answer (a moving scene rebuilds the image-space
+/// scene every frame; the test is O(triangles x vertices)).
+type ShapeCache = Option<(Arc<MeshGeometry>, bool)>;
+
+/// Whether a photon reflected off a caster may meet a caster again (see
+/// [`ImageSpaceScene::mirror_chains`]).
+fn mirror_chains(tlas: &crate::scene::bvh::Tlas, cache: &mut ShapeCache) -> bool {
+    let mut casters = tlas
+        .instances
+        .iter()
+        .filter(|i| !matches!(i.surface, crate::scene::Surface::Diffuse { .. }));
+    let one = match (casters.next(), casters.next()) {
+        (Some(one), None) => &one.blas.geometry,
+        (Some(_), Some(_)) => return true,
+        _ => return false,
+    };
+    match cache {
+        Some((mesh, answer)) if Arc::ptr_eq(mesh, one) => *answer,
+        _ => {
+            let answer = one.reflects_onto_itself();
+            *cache = Some((one.clone(), answer));
+            answer
+        }
+    }
 }
 
 /// What forces a view's state to be rebuilt.

@@ -50,6 +50,11 @@ pub struct TraceFeatures {
     pub dielectrics: bool,
     /// Some caustic light is a point or spot light: equal-area emission over the sphere.
     pub point_lights: bool,
+    /// A photon reflected off a caster may meet a caster again (two casters, or one whose
+    /// shape reflects onto itself: `MeshGeometry::reflects_onto_itself`): image space's trace
+    /// then marches the casters' front layer after a reflection (`TRACE_CASTER_CHAINS`). The
+    /// BVH tracers follow any chain without it (false in their scene).
+    pub caster_chains: bool,
 }
 
 impl TraceFeatures {
@@ -57,6 +62,7 @@ impl TraceFeatures {
     pub const ALL: Self = Self {
         dielectrics: true,
         point_lights: true,
+        caster_chains: true,
     };
 
     /// The shader defs of this variant.
@@ -67,6 +73,9 @@ impl TraceFeatures {
         }
         if self.point_lights {
             defs.push("TRACE_POINT_LIGHTS".into());
+        }
+        if self.caster_chains {
+            defs.push("TRACE_CASTER_CHAINS".into());
         }
         defs
     }

@@ -246,6 +246,7 @@ impl TraceSceneBuffers {
                     .iter()
                     .any(|i| matches!(i.surface, crate::scene::Surface::Dielectric { .. })),
                 point_lights: lights.iter().any(|(_, l)| l.kind != 0),
+                caster_chains: false,
             },
         })
     }
