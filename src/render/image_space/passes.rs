@@ -131,6 +131,7 @@ impl Ctx<'_> {
                 slots.out[2],
                 small(&s.steps),
                 s.hiz.as_entire_binding(),
+                s.lights.as_entire_binding(),
             )),
         )
     }

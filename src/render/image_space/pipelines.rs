@@ -105,6 +105,7 @@ pub(crate) fn init_image_space_pipelines(
                 out(),
                 uniform_buffer_sized(true, None),
                 storage_buffer_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
             ),
         ),
     );

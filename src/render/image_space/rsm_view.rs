@@ -17,6 +17,8 @@ pub struct RsmLight {
     pub axis: Vec3,
     /// The GPU light it came from.
     pub light: GpuLight,
+    /// Its face of a cube (+X, −X, +Y, −Y, +Z, −Z), if the light has six maps.
+    pub face: Option<u8>,
 }
 
 /// Widest cone a point or spot light's single RSM covers; a light that needs more (the
@@ -93,6 +95,7 @@ pub fn rsm_light(
             },
             axis: d,
             light: *light,
+            face: None,
         };
     }
     let cap = if light.kind == 2 {
@@ -130,6 +133,7 @@ pub fn rsm_light(
         },
         axis,
         light: *light,
+        face,
     }
 }
 
@@ -162,6 +166,14 @@ impl RsmLight {
                 first_layer as f32,
             ],
         );
+        // A cube face: its face and the entry of face 0 (each entry has three layers).
+        let cube = self.face.map_or([-1.0, 0.0], |f| {
+            [
+                f32::from(f),
+                (first_layer / 3).saturating_sub(u32::from(f)) as f32,
+            ]
+        });
+        push(&mut b, &[cube[0], cube[1], 0.0, 0.0]);
         b.resize(LIGHT_STRIDE as usize, 0);
         b
     }

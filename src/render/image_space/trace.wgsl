@@ -34,6 +34,13 @@ struct IsLight {
     flux: vec4<f32>,    // rgb: photon flux before the texel's cos^3 and spot factors; w: photons
     spot: vec4<f32>,    // xyz spot axis, w: cos inner
     misc: vec4<f32>,    // cos outer, kind (0 dir, 1 point, 2 spot), RSM side, first layer
+    cube: vec4<f32>,    // this cube face (+X, -X, +Y, -Y, +Z, -Z; -1: one map), entry of face 0
+}
+
+// An entry of the lights buffer read whole (LIGHT_STRIDE, 512 bytes).
+struct IsLightSlot {
+    l: IsLight,
+    pad: array<vec4<f32>, 10>,
 }
 
 const FLAG_DENOISE: u32 = 1u;
@@ -60,6 +67,12 @@ const FLAG_STILL_VIEW: u32 = 32u; // the camera did not move: SVGF's colour mean
 @group(0) @binding(14) var out_c: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(16) var<storage, read_write> hiz: array<f32>;
 @group(0) @binding(15) var<uniform> pass_step: vec4<u32>;  // step (px), flags (FLAG_*), iteration, 0
+@group(0) @binding(17) var<storage, read> faces: array<IsLightSlot>;  // every light's entry
+
+// The light view the light-space marches step in, and its first RSM layer: the dispatch's
+// light, or the cube face a mirror chain has moved into (`enter_face_of`).
+var<private> face_view: SpaceView;
+var<private> face_base: u32;
 
 // Counter words (`IMAGE_SPACE_COUNTERS` in src/render/image_space/passes.rs).
 const C_EMITTED: u32 = 0u;      // samples on a caster texel, traced
@@ -143,7 +156,7 @@ fn scene_depth(mode: u32, p: vec2<i32>) -> f32 {
     if mode == 0u {
         return camera_depth(p);
     }
-    let layer = i32(light.misc.w) + select(0, 2, mode == 2u);
+    let layer = i32(face_base) + select(0, 2, mode == 2u);
     let t = textureLoad(rsm, p, layer, 0);
     return select(-1.0, t.x, t.w != 0.0);
 }
@@ -336,7 +349,7 @@ fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Mar
         var plane = 0u;
         var levels = params.hiz.x;
         if mode != 0u {
-            plane = 1u + 2u * (u32(light.misc.w) / 3u) + select(0u, 1u, mode == 2u);
+            plane = 1u + 2u * (face_base / 3u) + select(0u, 1u, mode == 2u);
             levels = params.hiz.y;
         }
         return march_hiz(v, plane, levels, r, g);
@@ -455,7 +468,7 @@ fn march_front(v: SpaceView, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> MarchRes
         return r;
     }
     let size = vec2<i32>(v.size.xy);
-    let layer = i32(light.misc.w) + 1;
+    let layer = i32(face_base) + 1;
     let n = segment_steps_flat(g, max(params.knobs.w, v.size.x / FRONT_STEP_BASE));
     var s_prev = g.a;
     var zr_prev = segment_depth(g, g.a);
@@ -694,34 +707,66 @@ fn thin_far_wall(v: SpaceView, texel: vec2<i32>, front: vec4<f32>, inst: u32, o:
 #endif
 
 #ifdef TRACE_CASTER_CHAINS
+// Switch the marches to the face of the dispatch's cube that holds x (a light with one map:
+// nothing). Returns whether the face changed.
+fn enter_face_of(x: vec3<f32>) -> bool {
+    if light.cube.x < 0.0 {
+        return false;
+    }
+    let r = x - light.view.eye.xyz;
+    let a = abs(r);
+    var f = select(4u, 5u, r.z < 0.0);
+    if a.x >= a.y && a.x >= a.z {
+        f = select(0u, 1u, r.x < 0.0);
+    } else if a.y >= a.z {
+        f = select(2u, 3u, r.y < 0.0);
+    }
+    let entry = u32(light.cube.y) + f;
+    if 3u * entry == face_base || entry >= arrayLength(&faces) {
+        return false;
+    }
+    face_view = faces[entry].l.view;
+    face_base = 3u * entry;
+    return true;
+}
+
 // Where a photon that reflected off a caster's outside ends: its march through the light's
 // opaque layer, unless the light's caster-front layer holds a mirror before that receiver,
 // met from its front (a crossing the ray leaves from, at its own start, is stepped over):
 // there it reflects (Schlick with the mirror's F0) and marches on, up to MIRROR_EVENTS times
-// (the photon is dropped, and counted, if it meets one more). A dielectric met there is passed,
-// as before: one event on a caster's outside. `dropped` ends the photon.
+// (the photon is dropped, and counted, if it meets one more). A ray that leaves a cube face's
+// view before a receiver or a mirror goes on in the face it enters (a ring's second mirror
+// often lies in another face). A dielectric met there is passed, as before: one event on a
+// caster's outside. `dropped` ends the photon.
 struct ChainEnd {
     m: MarchResult,
     dropped: bool,
 }
 
-fn mirror_chain(v: SpaceView, o_in: vec3<f32>, d: ptr<function, vec3<f32>>, flux: ptr<function, vec3<f32>>, t_max: f32, scale: f32) -> ChainEnd {
+fn mirror_chain(o_in: vec3<f32>, d: ptr<function, vec3<f32>>, flux: ptr<function, vec3<f32>>, t_max: f32, scale: f32) -> ChainEnd {
     var end: ChainEnd;
     end.dropped = false;
     var o = o_in;
     var leg = o_in;
-    end.m = march(v, 1u, o, *d, t_max);
     var events = 0u;
-    for (var guard = 0u; guard < 2u * MIRROR_EVENTS + 2u; guard += 1u) {
-        let reach = select(t_max, distance(leg, end.m.pos), end.m.hit) - distance(leg, o);
+    for (var guard = 0u; guard < 4u * MIRROR_EVENTS + 8u; guard += 1u) {
+        let left = t_max - distance(leg, o);
+        end.m = march(face_view, 1u, o, *d, left);
+        let reach = select(left, distance(o, end.m.pos), end.m.hit);
         if reach <= 0.0 {
             return end;
         }
-        let c = march_front(v, o, *d, reach);
+        let c = march_front(face_view, o, *d, reach);
         if !c.hit {
+            // Left this face's view first: on in the face the ray enters.
+            let past = c.pos + *d * (1.0e-4 * scale);
+            if !end.m.hit && distance(o, c.pos) < 0.999 * reach && enter_face_of(past) {
+                o = past;
+                continue;
+            }
             return end;
         }
-        let t = textureLoad(rsm, c.px, i32(light.misc.w) + 1, 0);
+        let t = textureLoad(rsm, c.px, i32(face_base) + 1, 0);
         let nc = rsm_normal(t);
         if t.w == 0.0 || dot(*d, nc) >= 0.0 {
             // Leaving a surface (the ray's own start), not meeting one: step past it.
@@ -743,7 +788,6 @@ fn mirror_chain(v: SpaceView, o_in: vec3<f32>, d: ptr<function, vec3<f32>>, flux
         *d = optics_reflect(*d, nc);
         o = optics_offset_ray_origin(c.pos, select(nc, -nc, dot(*d, nc) < 0.0), scale);
         leg = o;
-        end.m = march(v, 1u, o, *d, t_max);
     }
     return end;
 }
@@ -756,6 +800,8 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if i >= photons {
         return;
     }
+    face_view = light.view;
+    face_base = u32(light.misc.w);
     let res = light.misc.z;
     let uv = optics_r2_point(i, params.frame.yz);
     let texel = vec2<i32>(min(uv * res, vec2(res - 1.0)));
@@ -889,7 +935,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     var m: MarchResult;
 #ifdef TRACE_CASTER_CHAINS
     if reflected {
-        let chain = mirror_chain(v, o, &d, &flux, t_max, scale);
+        let chain = mirror_chain(o, &d, &flux, t_max, scale);
         if chain.dropped {
             return;
         }

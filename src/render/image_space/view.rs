@@ -477,11 +477,13 @@ impl ImageSpaceViewState {
             hiz: storage("caustics:image_space:hiz", HizLayout::new(&key).words() * 4),
             hiz_layout: HizLayout::new(&key),
             params: uniform(device, "caustics:image_space:params", 1024),
-            lights: uniform(
-                device,
-                "caustics:image_space:lights",
-                LIGHT_STRIDE * key.lights.max(1) as u64,
-            ),
+            // Also read whole by the trace (`faces`: a mirror chain crosses a cube's faces).
+            lights: device.create_buffer(&BufferDescriptor {
+                label: Some("caustics:image_space:lights"),
+                size: LIGHT_STRIDE * key.lights.max(1) as u64,
+                usage: BufferUsages::UNIFORM | BufferUsages::STORAGE | BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             rsm_views: uniform(
                 device,
                 "caustics:image_space:rsm_views",
