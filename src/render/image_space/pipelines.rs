@@ -25,6 +25,7 @@ pub fn compute_source() -> String {
         include_str!("../optics.wgsl"),
         include_str!("../gbuffer.wgsl"),
         include_str!("trace.wgsl"),
+        include_str!("march.wgsl"),
         include_str!("svgf.wgsl"),
     ]
     .join("\n")
