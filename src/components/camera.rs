@@ -72,8 +72,9 @@ pub enum CausticsTechnique {
     /// Cascaded image-space photon tracing (seed 003): photons start on each light's
     /// reflective shadow maps (rasterised by the plugin), are marched through the light's
     /// depth and then the camera's (no BVH, no ray tracing), land in a per-pixel photon map
-    /// and are denoised by SVGF. One specular event (two refractions through a closed glass
-    /// object). Milliseconds per frame. Settings: [`crate::ImageSpaceSettings`].
+    /// and are denoised by SVGF. One event on a caster's outside (two refractions through a
+    /// closed glass object, with the reflections inside it), then up to 4 further mirrors.
+    /// Milliseconds per frame. Settings: [`crate::ImageSpaceSettings`].
     ImageSpace,
     /// Hash-grid photon mapping (seed 001): photons traced through the scene BVH (like AAPS)
     /// and stored at their first diffuse hit after a specular one, sorted into a uniform grid
