@@ -17,7 +17,7 @@ impl MeshGeometry {
     /// vertex in one plane) and for a closed convex one (every edge shared by two triangles once
     /// vertices are welded by position, and every vertex on one side of every triangle's
     /// plane), whose outside light can only leave; true otherwise (a ring, a bowl, a
-    /// heightfield), and when the mesh is too large to test ([`MAX_PLANE_TESTS`]).
+    /// heightfield), and when the mesh is too large to test (more than 2^24 plane tests).
     /// Degenerate triangles are skipped; no triangle at all is flat.
     pub fn reflects_onto_itself(&self) -> bool {
         let (lo, hi) = self
