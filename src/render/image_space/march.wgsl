@@ -192,8 +192,6 @@ fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Mar
         return r;
     }
     r.inside = g.a == 0.0;
-    let size = v.size.xy;
-    let thick = params.knobs.x;
     if (params.frame.w & FLAG_HIZ) != 0u {
         var plane = 0u;
         var levels = params.hiz.x;
@@ -203,7 +201,17 @@ fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Mar
         }
         return march_hiz(v, plane, levels, r, g);
     }
-    let n = segment_steps(g);
+    return march_linear(v, mode, r, g, segment_steps(g), 0.0);
+}
+
+// `n` linear steps over segment g through view v's depth (mode, see scene_depth): a step
+// that ends behind a surface by at most `thickness` of its depth plus `step_slack` times the
+// step's own depth change, after one in front of it (or over nothing), is a crossing, refined
+// by eq. 2 (optics_march_crossing). A miss ends at the segment's end.
+fn march_linear(v: SpaceView, mode: u32, r_in: MarchResult, g: Segment, n: u32, step_slack: f32) -> MarchResult {
+    var r = r_in;
+    let size = v.size.xy;
+    let thick = params.knobs.x;
     var s_prev = g.a;
     var zr_prev = segment_depth(g, g.a);
     var px_prev = vec2<i32>(floor(mix(g.s0, g.s1, g.a)));
@@ -213,7 +221,8 @@ fn march(v: SpaceView, mode: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Mar
         let zr = segment_depth(g, s);
         let px = clamp(vec2<i32>(floor(mix(g.s0, g.s1, s))), vec2(0), vec2<i32>(size) - 1);
         let zs = scene_depth(mode, px);
-        if zs > 0.0 && zr >= zs && zr - zs <= thick * zs && (zs_prev <= 0.0 || zr_prev <= zs_prev) {
+        let slack = step_slack * abs(zr - zr_prev) + thick * zs;
+        if zs > 0.0 && zr >= zs && zr - zs <= slack && (zs_prev <= 0.0 || zr_prev <= zs_prev) {
             let zsp = select(zs, zs_prev, zs_prev > 0.0);
             let u = optics_march_crossing(zr_prev, zr, zsp, zs);
             r.hit = true;
@@ -310,33 +319,7 @@ fn march_front(v: SpaceView, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> MarchRes
     if !g.ok {
         return r;
     }
-    let size = vec2<i32>(v.size.xy);
-    let layer = i32(face_base) + 1;
     let n = segment_steps_flat(g, max(params.knobs.w, v.size.x / FRONT_STEP_BASE));
-    var s_prev = g.a;
-    var zr_prev = segment_depth(g, g.a);
-    let p0 = vec2<i32>(floor(mix(g.s0, g.s1, g.a)));
-    let t0 = textureLoad(rsm, clamp(p0, vec2(0), size - 1), layer, 0);
-    var zs_prev = select(-1.0, t0.x, t0.w != 0.0);
-    for (var i = 1u; i <= n; i += 1u) {
-        let s = mix(g.a, g.b, f32(i) / f32(n));
-        let zr = segment_depth(g, s);
-        let p = clamp(vec2<i32>(floor(mix(g.s0, g.s1, s))), vec2(0), size - 1);
-        let t = textureLoad(rsm, p, layer, 0);
-        let zs = select(-1.0, t.x, t.w != 0.0);
-        let slack = abs(zr - zr_prev) + params.knobs.x * zs;
-        if zs > 0.0 && zr >= zs && zr - zs <= slack && (zs_prev <= 0.0 || zr_prev <= zs_prev) {
-            let u = optics_march_crossing(zr_prev, zr, select(zs, zs_prev, zs_prev > 0.0), zs);
-            r.hit = true;
-            r.pos = segment_point(v, g, mix(s_prev, s, u));
-            r.px = p;
-            return r;
-        }
-        s_prev = s;
-        zr_prev = zr;
-        zs_prev = zs;
-    }
-    r.pos = segment_point(v, g, g.b);
-    return r;
+    return march_linear(v, 3u, r, g, n, 1.0);
 }
 #endif

@@ -151,12 +151,13 @@ fn rsm_normal(t: vec4<f32>) -> vec3<f32> {
 }
 
 // Depth of the surface under pixel p in a march: mode 0 the camera; 1 the light's opaque
-// layer; 2 the light's caster-back layer. -1 where there is none.
+// layer; 2 the light's caster-back layer; 3 its caster-front layer (no Hi-Z pyramid: marched
+// linearly only). -1 where there is none.
 fn scene_depth(mode: u32, p: vec2<i32>) -> f32 {
     if mode == 0u {
         return camera_depth(p);
     }
-    let layer = i32(face_base) + select(0, 2, mode == 2u);
+    let layer = i32(face_base) + select(select(0, 2, mode == 2u), 1, mode == 3u);
     let t = textureLoad(rsm, p, layer, 0);
     return select(-1.0, t.x, t.w != 0.0);
 }
