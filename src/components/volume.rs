@@ -7,6 +7,12 @@ use bevy::render::extract_component::ExtractComponent;
 /// enter through `entry` from every [`crate::CausticLight`], are marched slab by slab against
 /// rasterised G-buffers, and those that leave through an `exit` face after a specular event are
 /// projected onto the receivers beyond it and splatted. A face in neither list culls.
+///
+/// A volume lights only the part of a caster inside it: for a caster that moves, size the box
+/// for its path or move the volume with it (for example as a child of an entity that follows
+/// the caster's translation; a volume that turns with a spinning caster turns its entry face
+/// away from the light). The headless renderer's fitted volumes are fitted again whenever the
+/// casters' bounds change.
 #[derive(Component, Reflect, Clone, Debug, PartialEq)]
 #[reflect(Component, Default, Clone)]
 #[require(Transform)]

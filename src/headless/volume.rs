@@ -27,8 +27,31 @@ pub(crate) fn apply_template(v: &mut CausticsVolume, t: &CausticsVolume) {
     v.progressive = t.progressive;
 }
 
+/// A volume the headless renderer fitted, and the casters' bounds it was fitted to.
+#[derive(Component)]
+pub(crate) struct FittedVolume((Vec3, Vec3));
+
+/// The margin a fitted volume leaves around the casters, a share of each extent.
+const FIT_MARGIN: f32 = 0.1;
+
+/// The volume around casters `bounds` for `light` ([`CausticsVolume::fit`] or
+/// [`CausticsVolume::fit_point`]); `None` when the light lies inside the bounds.
+fn fit_for(bounds: (Vec3, Vec3), light: &TraceLight) -> Option<(CausticsVolume, Transform)> {
+    match *light {
+        TraceLight::Directional { direction, .. } => {
+            Some(CausticsVolume::fit(bounds, direction, FIT_MARGIN))
+        }
+        TraceLight::Point { position, .. } | TraceLight::Spot { position, .. } => {
+            CausticsVolume::fit_point(bounds, position, FIT_MARGIN)
+        }
+    }
+}
+
 /// Fit one volume per caustic light around the casters (their world box), entry face towards
-/// the light, once the scene is gathered, unless a volume exists already.
+/// the light, once the scene is gathered, unless a volume exists already. A fitted volume
+/// follows its casters: when their bounds change (a caster moved), it is fitted again, as a
+/// game would parent a volume to a moving caster or size it for the caster's path (a volume
+/// left behind lights only the part of the caster still inside it).
 pub(crate) fn fit_volumes(
     mut commands: Commands,
     template: Res<VolumeTemplate>,
@@ -36,9 +59,16 @@ pub(crate) fn fit_volumes(
     existing: Query<(), With<CausticsVolume>>,
     cameras: Query<(), With<crate::Caustics>>,
     mut fitted: ResMut<VolumesFitted>,
+    mut followers: Query<(&mut CausticsVolume, &mut Transform, &mut FittedVolume)>,
 ) {
+    if fitted.0 {
+        if let Some(scene) = scene.filter(|s| s.is_changed()) {
+            refit(&scene, &mut followers);
+        }
+        return;
+    }
     // After the camera and the job's hook (which may declare volumes) are in.
-    if fitted.0 || !template.0 || cameras.is_empty() {
+    if !template.0 || cameras.is_empty() {
         return;
     }
     if !existing.is_empty() {
@@ -57,15 +87,7 @@ pub(crate) fn fit_volumes(
         return;
     };
     for (entity, light) in &scene.lights {
-        let fit = match *light {
-            TraceLight::Directional { direction, .. } => {
-                Some(CausticsVolume::fit(bounds, direction, 0.1))
-            }
-            TraceLight::Point { position, .. } | TraceLight::Spot { position, .. } => {
-                CausticsVolume::fit_point(bounds, position, 0.1)
-            }
-        };
-        let Some((mut v, t)) = fit else {
+        let Some((mut v, t)) = fit_for(bounds, light) else {
             warn!(
                 "caustics volume: light {entity} lies inside the casters' bounds, so no volume \
                  around them can take its light through an entry face; none fitted for it \
@@ -75,9 +97,36 @@ pub(crate) fn fit_volumes(
         };
         apply_template(&mut v, &template.1);
         v.light = Some(*entity);
-        commands.spawn((v, t, Name::new("caustics volume (fitted)")));
+        commands.spawn((
+            v,
+            t,
+            FittedVolume(bounds),
+            Name::new("caustics volume (fitted)"),
+        ));
     }
     fitted.0 = true;
+}
+
+/// Fit the fitted volumes again where the casters' bounds changed (their box and pose only).
+fn refit(
+    scene: &CausticsScene,
+    followers: &mut Query<(&mut CausticsVolume, &mut Transform, &mut FittedVolume)>,
+) {
+    let Some(bounds) = scene.tlas.bounds_where(|i| i.surface.is_specular()) else {
+        return;
+    };
+    for (mut v, mut t, mut fitted) in followers.iter_mut() {
+        if fitted.0 == bounds {
+            continue;
+        }
+        let light = scene.lights.iter().find(|(e, _)| Some(*e) == v.light);
+        let Some((fit, pose)) = light.and_then(|(_, l)| fit_for(bounds, l)) else {
+            continue;
+        };
+        v.size = fit.size;
+        *t = pose;
+        fitted.0 = bounds;
+    }
 }
 
 /// Whether to fit volumes, and the settings they take.

@@ -503,6 +503,54 @@ fn a_moving_caster_leaves_no_trail() {
     }
 }
 
+/// A moving caster through caustics volumes (issue 28): the ball of `glass_sphere` slides 1 cm
+/// a frame ([`slide_ball`]; 128², defaults). A volume has no history (a change propagates
+/// anew), so over the report's frames 17 to 24 (the ball 14 to 21 cm from its start) its RMSE
+/// against each frame's own state (CPU reference, 2^20 photons) is within 1.3x (issue 28's
+/// bound) that of the still ball's same frames, and each frame matches its own state better than
+/// the previous one's. The volume the headless renderer fits around the casters follows them:
+/// fitted once, the ball left it (1.56x in the report's moving scene).
+#[test]
+fn a_moving_caster_in_a_volume() {
+    let _g = GPU.slot();
+    if !require_gpu() {
+        return;
+    }
+    let steps = |i: usize| (i - 2) as u32;
+    let first = steps(MEASURED.start) - 1;
+    let references: Vec<CausticImage> = (first..=steps(MEASURED.end - 1))
+        .map(slide_reference)
+        .collect();
+    let still_ref = slide_reference(0);
+    let still = sphere_frames(T::Volume, MEASURED.end, None, Default::default());
+    let still = mean_rmse(&still, |_| &still_ref);
+    let frames = sphere_frames(
+        T::Volume,
+        MEASURED.end,
+        Some(slide_ball),
+        Default::default(),
+    );
+    let mut own = 0.0;
+    for i in MEASURED {
+        let reference = &references;
+        let rmse = |s: u32| {
+            let r = &reference[(s - first) as usize];
+            compare(&frames[i], r, None).expect("size").rmse
+        };
+        let (now, before) = (rmse(steps(i)), rmse(steps(i) - 1));
+        assert!(
+            now < before,
+            "readback {i}: {now:.1} lx, previous state {before:.1}"
+        );
+        own += now / MEASURED.len() as f64;
+    }
+    println!(
+        "Volume: RMSE still {still:.1} lx, sliding ball {own:.1} ({:.2}x)",
+        own / still
+    );
+    assert!(own <= 1.3 * still, "{own:.1} lx vs {still:.1} still");
+}
+
 /// How far [`orbit_camera`] turns the camera each frame, radians (about 1.3 px of the floor's
 /// caustic at 128²).
 const ORBIT_STEP: f32 = 0.004;
