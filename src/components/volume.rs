@@ -54,7 +54,7 @@ pub struct CausticsVolume {
     /// (`left_inside` halves as the side doubles; on the brilliant this leaked light is 39 % of
     /// the floor caustic at 200 and 22 % at 800, so 200's figure is partly leak); photons that
     /// hop between slabs more than `4 · slabs + 4` times are dropped (counted as
-    /// `step_limit`); and a box aligned with the texel grid rounds its outline to whole
+    /// `step_limit`, their flux as `hop_limit_lm`); and a box aligned with the texel grid rounds its outline to whole
     /// texels (glass_slab: +0.8 % of the photons at 200, -0.76 % at 400, exact at 300 and 800).
     /// Range [16, 4096], clamped with a warning. Cost: two rasterisations per slab, quadratic.
     #[reflect(@16_u32..=4096_u32)]

@@ -170,6 +170,9 @@ pub struct VolumeCounters {
     pub left_inside: u64,
     /// Their luminous flux, lm.
     pub left_inside_lm: f64,
+    /// Luminous flux of the photons still in flight after the most slab hops
+    /// (`4 · slabs + 4`), dropped (counted in `step_limit`), lm.
+    pub hop_limit_lm: f64,
 }
 
 impl VolumeCounters {
@@ -195,6 +198,7 @@ impl VolumeCounters {
             absorbed: u(14),
             left_inside: u(15),
             left_inside_lm: f(16),
+            hop_limit_lm: f(17),
         }
     }
 }

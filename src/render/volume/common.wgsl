@@ -74,6 +74,7 @@ const C_IGNORED: u32 = 13u;    // transmissive hits the media rules ignored
 const C_ABSORBED: u32 = 14u;   // non-contributive photons stopped on diffuse surfaces
 const C_LEFT_INSIDE: u32 = 15u; // photons leaving the volume still inside a dielectric (P_med)
 const C_LEFT_INSIDE_LM: u32 = 16u; // f32 bits: their luminous flux
+const C_HOP_LIMIT_LM: u32 = 17u; // f32 bits: luminous flux of the photons the slab-hop cap stopped
 
 // Density tiles (section 3.4's grid, made adaptive). Each of the 7 sets (the 6 projector faces,
 // then the deposits on the slab texel grid) holds levels of tiles, coarsest first: side

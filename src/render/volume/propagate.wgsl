@@ -492,7 +492,9 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>) {
         count(C_BACKWARD);
         j -= 1u;
     }
+    // Still in flight after the last hop: dropped, counted with its flux.
     count(C_STEP_LIMIT);
+    count_add_f32(C_HOP_LIMIT_LM, dot(p.flux.xyz, vec3(0.2126, 0.7152, 0.0722)));
     set_end(&p, END_GONE);
     finals[i] = p;
 }
