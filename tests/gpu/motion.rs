@@ -532,9 +532,8 @@ fn a_moving_caster_in_a_volume() {
     );
     let mut own = 0.0;
     for i in MEASURED {
-        let reference = &references;
         let rmse = |s: u32| {
-            let r = &reference[(s - first) as usize];
+            let r = &references[(s - first) as usize];
             compare(&frames[i], r, None).expect("size").rmse
         };
         let (now, before) = (rmse(steps(i)), rmse(steps(i) - 1));
