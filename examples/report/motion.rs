@@ -18,6 +18,7 @@ use bevy::prelude::World;
 use bevy_caustics::CausticsTechnique;
 use bevy_caustics::headless::motion::{
     MEASURED, SLIDE_STEP, circle_cube, jitter_sun, mean_flicker, mean_rmse, move_ball, slide_ball,
+    slide_steps,
 };
 use bevy_caustics::headless::{RenderJob, run};
 use bevy_caustics::reference::{CausticImage, compare};
@@ -94,11 +95,6 @@ pub fn slide_references(scene: &Path, size: u32) -> Result<Vec<CausticImage>, St
             }
         })
         .collect()
-}
-
-/// Slide steps of the state `frame_caustics[index]` shows.
-fn slide_steps(index: usize) -> u32 {
-    index.saturating_sub(2) as u32
 }
 
 /// The caustics of every frame of one run.

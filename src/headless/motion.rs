@@ -19,10 +19,15 @@ pub const MEASURED: Range<usize> = 16..24;
 /// How far [`slide_ball`] moves the ball each frame, metres.
 pub const SLIDE_STEP: f32 = 0.01;
 
+/// The slide steps of the ball in the state `frame_caustics[index]` shows under [`slide_ball`].
+pub fn slide_steps(index: usize) -> u32 {
+    index.saturating_sub(2) as u32
+}
+
 /// The offset of the ball (metres along +x) in the state `frame_caustics[index]` shows under
 /// [`slide_ball`].
 pub fn slide_offset(index: usize) -> f32 {
-    SLIDE_STEP * index.saturating_sub(2) as f32
+    SLIDE_STEP * slide_steps(index) as f32
 }
 
 /// Marks the cube of [`circle_cube`].

@@ -20,7 +20,8 @@ use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy_caustics::headless::motion::{
-    MEASURED, SLIDE_STEP, circle_cube, jitter_sun, mean_flicker, mean_rmse, slide_ball, spawn_cube,
+    MEASURED, SLIDE_STEP, circle_cube, jitter_sun, mean_flicker, mean_rmse, slide_ball,
+    slide_steps, spawn_cube,
 };
 use bevy_caustics::headless::{RenderJob, run};
 use bevy_caustics::reference::{CausticImage, compare};
@@ -466,9 +467,8 @@ fn a_moving_caster_leaves_no_trail() {
     if !require_gpu() {
         return;
     }
-    let steps = |i: usize| (i - 2) as u32;
-    let first = steps(SLIDE_MEASURED.start) - 2;
-    let last = steps(SLIDE_MEASURED.end - 1) + 1;
+    let first = slide_steps(SLIDE_MEASURED.start) - 2;
+    let last = slide_steps(SLIDE_MEASURED.end - 1) + 1;
     let references: Vec<(u32, CausticImage)> =
         (first..=last).map(|s| (s, slide_reference(s))).collect();
     for technique in [T::Aaps, T::ImageSpace, T::PhotonMap] {
@@ -488,11 +488,14 @@ fn a_moving_caster_leaves_no_trail() {
                 .iter()
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .expect("refs");
-            let own = rmse.iter().find(|(s, _)| *s == steps(i)).expect("own");
+            let own = rmse
+                .iter()
+                .find(|(s, _)| *s == slide_steps(i))
+                .expect("own");
             own_rmse.push(own.1);
             assert_eq!(
                 best.0,
-                steps(i),
+                slide_steps(i),
                 "{technique:?}, readback {i}: best matches the state of step {} (RMSE by step {rmse:.0?})",
                 best.0
             );
@@ -516,9 +519,8 @@ fn a_moving_caster_in_a_volume() {
     if !require_gpu() {
         return;
     }
-    let steps = |i: usize| (i - 2) as u32;
-    let first = steps(MEASURED.start) - 1;
-    let references: Vec<CausticImage> = (first..=steps(MEASURED.end - 1))
+    let first = slide_steps(MEASURED.start) - 1;
+    let references: Vec<CausticImage> = (first..=slide_steps(MEASURED.end - 1))
         .map(slide_reference)
         .collect();
     let still_ref = slide_reference(0);
@@ -536,7 +538,7 @@ fn a_moving_caster_in_a_volume() {
             let r = &references[(s - first) as usize];
             compare(&frames[i], r, None).expect("size").rmse
         };
-        let (now, before) = (rmse(steps(i)), rmse(steps(i) - 1));
+        let (now, before) = (rmse(slide_steps(i)), rmse(slide_steps(i) - 1));
         assert!(
             now < before,
             "readback {i}: {now:.1} lx, previous state {before:.1}"
