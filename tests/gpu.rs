@@ -26,6 +26,8 @@ mod many_parts;
 mod motion;
 #[path = "gpu/pay_for_use.rs"]
 mod pay_for_use;
+#[path = "gpu/per_frame/mod.rs"]
+mod per_frame;
 #[path = "gpu/photon_map.rs"]
 mod photon_map;
 #[path = "gpu/stiff.rs"]
@@ -38,8 +40,6 @@ mod thin;
 mod twins;
 #[path = "gpu/volume.rs"]
 mod volume;
-#[path = "gpu/whole_machine/mod.rs"]
-mod whole_machine;
 
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -14,6 +14,7 @@ use bevy::prelude::*;
 use bevy::render::RenderPlugin;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
+use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
@@ -255,7 +256,11 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
                     exit_condition: ExitCondition::DontExit,
                     ..default()
                 })
-                .disable::<WinitPlugin>(),
+                .disable::<WinitPlugin>()
+                // Frame by frame: the render world runs after the main world's frame, not
+                // beside its next one, so each frame's dispatch log and readbacks are its own
+                // however loaded the machine is.
+                .disable::<PipelinedRenderingPlugin>(),
         )
         .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(
             1.0 / 240.0,
@@ -448,6 +453,9 @@ fn drive(
                 layout,
             ) {
                 Ok(()) => {
+                    // The camera renders from this frame on: the first measured frame's log
+                    // holds everything its technique ran since (a volume propagates at once).
+                    log.take();
                     // The camera's first frame (a readback shows the frame it was asked in).
                     if job.0.every_frame && job.0.technique != CausticsTechnique::Reference {
                         readback.request();
@@ -465,7 +473,6 @@ fn drive(
                 return;
             }
             if job.0.technique != CausticsTechnique::Reference {
-                log.take();
                 // With `every_frame`, its second frame (the first was asked for as the
                 // camera spawned).
                 if job.0.every_frame {

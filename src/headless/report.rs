@@ -91,7 +91,9 @@ pub struct RenderReport {
     /// The same at every measured frame, in order.
     #[serde(skip)]
     pub frame_gpu_bytes: Vec<BTreeMap<String, u64>>,
-    /// The caustics passes dispatched in each measured frame.
+    /// The caustics passes dispatched in each measured frame: list `n` holds what the render
+    /// world ran for measured frame `n - 1` (the headless renderer runs frame by frame, without
+    /// pipelined rendering); the first holds every frame since the camera spawned.
     pub frame_passes: Vec<Vec<String>>,
 }
 

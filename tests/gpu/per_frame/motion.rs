@@ -1,4 +1,4 @@
-//! The `motion` tests that take both GPU slots (see `whole_machine`).
+//! The `motion` tests that check what happened in a given frame (see `per_frame`).
 
 use crate::{GPU, require_gpu};
 use bevy::prelude::*;
@@ -15,7 +15,7 @@ use crate::motion::*;
 ///   and no more than without TAA.
 #[test]
 fn taa_keeps_the_caustic_and_does_not_flicker() {
-    let _g = GPU.exclusive();
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

@@ -28,9 +28,8 @@ fn glass_sphere(
     .expect("render")
 }
 
-/// The measured frames' pass lists, and how often `name` was dispatched in all of them. (The log
-/// is drained in the main world while the render world may be a frame behind, so one list can
-/// hold two frames' passes and the next none: count dispatches, not lists.)
+/// The measured frames' pass lists, and how often `name` was dispatched in all of them (the
+/// first list also holds the frames between the camera's spawning and the first measured one).
 const SLAB1: &str = "caustics/volume/slab1";
 
 fn dispatches(r: &RenderReport, name: &str) -> usize {
@@ -54,7 +53,7 @@ fn last_with(r: &RenderReport, name: &str) -> Option<usize> {
 /// by photons / traced, already estimates the full energy.
 #[test]
 fn volume_progressive_mode_converges_to_the_full_update() {
-    let _g = GPU.exclusive();
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
@@ -226,7 +225,7 @@ fn gizmo_midpoints(
     depth_test: bool,
 ) -> std::collections::HashMap<VolumeGizmoKind, (u32, u32)> {
     let report = glass_sphere(4, CausticsVolume::default(), Some(hook));
-    // Once per frame, as the splats (give or take the frame the log was drained in).
+    // Once per frame, as the splats.
     let (g, splats) = (
         dispatches(&report, GIZMO_PASS),
         dispatches(&report, "caustics/volume/splat"),
@@ -297,7 +296,7 @@ const ROLES: [VolumeGizmoKind; 4] = [
 /// (and in none without it: the progressive test), as often as the splats.
 #[test]
 fn volume_gizmos_draw_each_role_in_its_colour() {
-    let _g = GPU.exclusive();
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

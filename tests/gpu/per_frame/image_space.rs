@@ -1,4 +1,4 @@
-//! The `image_space` tests that take both GPU slots (see `whole_machine`).
+//! The `image_space` tests that check what happened in a given frame (see `per_frame`).
 
 use crate::{GPU, reference, require_gpu, scene};
 use bevy::prelude::*;
@@ -18,7 +18,7 @@ use crate::image_space::*;
 ///   the reference falls below 1.5x the settled RMSE within the 8 following frames.
 #[test]
 fn image_space_denoising_pays_and_does_not_smear() {
-    let _g = GPU.exclusive();
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }

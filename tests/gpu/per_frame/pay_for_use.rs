@@ -1,4 +1,4 @@
-//! The `pay_for_use` tests that take both GPU slots (see `whole_machine`).
+//! The `pay_for_use` tests that check what happened in a given frame (see `per_frame`).
 
 use crate::{GPU, require_gpu, scene};
 use bevy_caustics::CausticsTechnique;
@@ -14,7 +14,7 @@ use crate::pay_for_use::*;
 fn switching_techniques_frees_their_memory() {
     use bevy::prelude::World;
     use bevy_caustics::{Caustics, CausticsTechnique as T};
-    let _g = GPU.exclusive();
+    let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
