@@ -1,32 +1,24 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
 
-use bevy::app::{AppExit, ScheduleRunnerPlugin};
-use bevy::asset::{AssetPlugin, LoadState, RenderAssetUsages, UntypedHandle};
+use bevy::app::AppExit;
+use bevy::asset::{LoadState, RenderAssetUsages, UntypedHandle};
 use bevy::camera::{Hdr, RenderTarget};
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::diagnostic::{DiagnosticsStore, FrameCount};
 use bevy::light::{DirectionalLight, PointLight, SpotLight};
-use bevy::pbr::DefaultOpaqueRendererMethod;
 use bevy::prelude::*;
-use bevy::render::RenderPlugin;
-use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
-use bevy::window::ExitCondition;
-use bevy::winit::WinitPlugin;
 
 use super::adapter::{decode_f16_rgba, tonemap_preview, unpad_rows};
-use super::check::check_job;
 use super::counters::{AapsCounters, ImageSpaceCounters, PhotonMapCounters, decode_photons};
 use super::load_error::{LoaderPanicCapture, load_failure_reason, report_load_failures_of};
 use super::report::{PassSamples, RenderReport, sample_pass_times};
 use crate::limits::CausticsLimits;
 use crate::reference::{CausticImage, CausticsReferenceImage, ReferenceProgress, ReferenceStatus};
-use crate::{Caustics, CausticsDispatchLog, CausticsPlugin, CausticsQuality, CausticsTechnique};
+use crate::{Caustics, CausticsDispatchLog, CausticsQuality, CausticsTechnique};
 
 /// One render.
 #[derive(Clone, Debug)]
@@ -70,7 +62,7 @@ pub struct RenderJob {
     /// deferred the default): receivers rendered forward get no caustic and a warning (tests).
     /// Default false.
     pub forward: bool,
-    /// The device maxima the job's sizes are checked against ([`check_job`]). Default None:
+    /// The device maxima the job's sizes are checked against ([`super::check_job`]). Default None:
     /// the WebGPU default device's ([`CausticsLimits::default`]); the command-line renderer
     /// sets the adapter's.
     pub limits: Option<CausticsLimits>,
@@ -153,6 +145,8 @@ pub(super) struct Shared(pub(super) Arc<Mutex<Outcome>>);
 
 #[derive(Default)]
 pub(super) struct Outcome {
+    /// The results of a batch's jobs finished before this one ([`super::batch`]).
+    pub(super) done: Vec<Result<RenderReport, String>>,
     pub(super) error: Option<String>,
     pub(super) report: RenderReport,
     twin_raw: Vec<u8>,
@@ -172,132 +166,67 @@ pub(super) enum Phase {
 }
 
 #[derive(Resource)]
-struct Handles {
+pub(super) struct Handles {
     scene: Handle<bevy::gltf::Gltf>,
     /// The glTF's `Scene0` (fails alone when the glTF has no scene).
     root: UntypedHandle,
     target: Handle<Image>,
     twin: Option<Handle<Image>>,
     right: Option<Handle<Image>>,
+    /// The frame the job started in.
+    started: u32,
 }
 
 /// Held while the scene loads: a panicking loader is told in our error line, not printed.
 #[derive(Resource)]
-struct LoadingScene(LoaderPanicCapture);
+pub(super) struct LoadingScene(LoaderPanicCapture);
+
+/// The job's scene (the glTF's nodes are its children).
+#[derive(Component)]
+pub(super) struct JobScene;
 
 #[derive(Component)]
-struct MainCamera;
+pub(super) struct MainCamera;
 
 #[derive(Component)]
-struct TwinCamera;
+pub(super) struct TwinCamera;
 
 /// Every camera the job spawned (main, right eye, twin): switched off once the readbacks of
 /// the last measured frame are taken, so the frames spent waiting for them render nothing.
 #[derive(Component)]
-struct JobCamera;
+pub(super) struct JobCamera;
 
-/// Render `job`. Errors are one line, meant for the user; the sizes are checked first
-/// ([`check_job`] against `job.limits`).
-pub fn run(job: RenderJob) -> Result<RenderReport, String> {
-    if !job.scene.is_file() {
-        return Err(format!("scene file not found: {}", job.scene.display()));
-    }
-    let ext = job
-        .scene
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext != "gltf" && ext != "glb" {
-        return Err(format!(
-            "not a glTF file (.gltf or .glb): {}",
-            job.scene.display()
-        ));
-    }
-    check_job(&job, &job.limits.clone().unwrap_or_default())?;
-    // The asset root is the glTF's folder (its buffers and images resolve against it), as an
-    // absolute path: relative to the working directory, whatever Bevy's own asset root is.
-    let scene = std::fs::canonicalize(&job.scene)
-        .map_err(|e| format!("cannot open {}: {e}", job.scene.display()))?;
-    let dir = scene.parent().map(|p| p.to_path_buf()).unwrap_or_default();
-    // A glTF the loader refuses is this job's error, in one line: the asset server's own
-    // ERROR about it (once per handle, with a backtrace under RUST_BACKTRACE) stays quiet.
+/// While `job`'s scene loads: a glTF the loader refuses is the job's error, in one line (the
+/// asset server's own ERROR about it, once per handle, with a backtrace under RUST_BACKTRACE,
+/// stays quiet), and a panicking loader is told in that line.
+pub(super) fn loading(job: &RenderJob) -> LoadingScene {
     report_load_failures_of(&asset_name(&job.scene));
-    let log = super::tool_log_plugin();
-    let shared = Shared::default();
-    let mut app = App::new();
-    let asset = AssetPlugin {
-        file_path: dir.to_string_lossy().into_owned(),
-        ..default()
-    };
-    let mut wgpu = bevy::render::settings::WgpuSettings::default();
-    if job.webgpu_limits {
-        wgpu.constrained_limits = Some(bevy::render::settings::WgpuLimits::default());
+    LoadingScene(LoaderPanicCapture::start())
+}
+
+impl Outcome {
+    /// Files the finished job's result with the batch's and starts the next job's outcome
+    /// (the adapter, recorded once as the renderer starts, stays).
+    pub(super) fn close_job(&mut self) {
+        let result = conclude(self, false);
+        let mut fresh = Outcome {
+            done: std::mem::take(&mut self.done),
+            ..Default::default()
+        };
+        fresh.done.push(result);
+        fresh.report.adapter = std::mem::take(&mut self.report.adapter);
+        fresh.report.driver = std::mem::take(&mut self.report.driver);
+        *self = fresh;
     }
-    if !job.disabled_features.is_empty() {
-        wgpu.disabled_features = Some(job.disabled_features);
-        wgpu.features.remove(job.disabled_features);
-    }
-    let render = RenderPlugin {
-        render_creation: wgpu.into(),
-        synchronous_pipeline_compilation: true,
-        ..default()
-    };
-    if job.window {
-        app.add_plugins(DefaultPlugins.set(asset).set(render).set(log));
-    } else {
-        app.add_plugins(
-            DefaultPlugins
-                .set(asset)
-                .set(render)
-                .set(log)
-                .set(WindowPlugin {
-                    primary_window: None,
-                    exit_condition: ExitCondition::DontExit,
-                    ..default()
-                })
-                .disable::<WinitPlugin>()
-                // Frame by frame: the render world runs after the main world's frame, not
-                // beside its next one, so each frame's dispatch log and readbacks are its own
-                // however loaded the machine is.
-                .disable::<PipelinedRenderingPlugin>(),
-        )
-        .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(
-            1.0 / 240.0,
-        )));
-    }
-    // No `DefaultOpaqueRendererMethod::deferred()` here: the plugin makes it the default.
-    app.add_plugins((RenderDiagnosticsPlugin, CausticsPlugin));
-    if job.forward {
-        app.insert_resource(DefaultOpaqueRendererMethod::forward());
-    }
-    app.insert_resource(Job(job.clone()))
-        .insert_resource(LoadingScene(LoaderPanicCapture::start()))
-        .insert_resource(shared.clone())
-        .init_resource::<Phase>()
-        .add_systems(Startup, start)
-        .insert_resource(super::volume::VolumeTemplate(
-            job.technique == CausticsTechnique::Volume,
-            job.volume.clone(),
-        ))
-        .init_resource::<super::volume::VolumesFitted>()
-        .add_systems(
-            Update,
-            (super::stage::stage, drive, super::volume::fit_volumes).chain(),
-        );
-    if job.mark_lights {
-        app.add_systems(Update, crate::mark_every_light);
-    }
-    super::render_watch::watch_render_world(&mut app, &shared);
-    app.run();
-    let mut o = shared
-        .0
-        .lock()
-        .map_err(|_| "internal error: poisoned state".to_string())?;
+}
+
+/// The finished (or failed) job's result: its error, or the report with each pass's median
+/// time.
+pub(super) fn conclude(o: &mut Outcome, window: bool) -> Result<RenderReport, String> {
     if let Some(e) = o.error.take() {
         return Err(e);
     }
-    if !o.finished && !job.window {
+    if !o.finished && !window {
         // Bevy quits on a wgpu validation or out-of-memory error (its default
         // RenderErrorHandler); a render that stopped early is an error, never a result.
         return Err(
@@ -315,16 +244,17 @@ pub fn run(job: RenderJob) -> Result<RenderReport, String> {
     Ok(std::mem::take(&mut o.report))
 }
 
-fn start(
+pub(super) fn start(
     mut commands: Commands,
     job: Res<Job>,
     assets: Res<AssetServer>,
     mut images: ResMut<Assets<Image>>,
+    frames: Res<FrameCount>,
 ) {
     let name = asset_name(&job.0.scene);
     let scene = assets.load(name.clone());
     let root = assets.load(GltfAssetLabel::Scene(0).from_asset(name));
-    commands.spawn(WorldAssetRoot(root.clone()));
+    commands.spawn((JobScene, WorldAssetRoot(root.clone())));
     let format = if job.0.linear {
         TextureFormat::Rgba16Float
     } else {
@@ -357,6 +287,7 @@ fn start(
         target,
         twin,
         right,
+        started: frames.0,
     });
 }
 
@@ -377,7 +308,7 @@ fn format_bytes(f: TextureFormat) -> usize {
 }
 
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn drive(
+pub(super) fn drive(
     mut commands: Commands,
     job: Res<Job>,
     shared: Res<Shared>,
@@ -425,7 +356,8 @@ fn drive(
         return;
     }
     match *phase {
-        Phase::Loading => match scene_loaded(&assets, &handles, &job.0, frames.0) {
+        Phase::Loading => match scene_loaded(&assets, &handles, &job.0, frames.0 - handles.started)
+        {
             Err(msg) => fail(msg, &mut exit),
             Ok(true) => {
                 commands.remove_resource::<LoadingScene>();
@@ -557,7 +489,8 @@ fn drive(
             finish_report(&job.0, &mut o, &warnings, reference);
             o.report.loss_warnings = losses.map_or(Vec::new(), |l| l.messages.clone());
             o.finished = true;
-            exit.write(AppExit::Success);
+            // The next job of a batch, or the end.
+            commands.queue(super::batch::next_job);
         }
     }
 }

@@ -5,6 +5,7 @@
 //! succeeded.
 
 mod adapter;
+mod batch;
 mod check;
 mod counters;
 mod job;
@@ -17,6 +18,7 @@ mod volume;
 
 pub use crate::volume::volume_from_extras;
 pub use adapter::{adapter_limits, decode_f16_rgba, find_adapter, quiet_headless_environment};
+pub use batch::{run, run_all};
 pub use check::check_job;
 pub use counters::*;
 pub use job::*;
