@@ -1,7 +1,7 @@
 //! The AAPS technique on lavapipe: closed forms, energy and error against the CPU reference,
 //! adaptive against a frozen uniform task buffer, stress, and nothing dispatched without work.
 
-use bevy_caustics::headless::{RenderJob, RenderReport, run};
+use bevy_caustics::headless::{RenderJob, RenderReport, run, run_all};
 use bevy_caustics::reference::cache::AAPS_LEVELS;
 use bevy_caustics::reference::compare;
 use bevy_caustics::{AapsSettings, CausticsTechnique};
@@ -14,8 +14,8 @@ use super::{
 /// frame; after 8 frames the photon count changes by < 1 % per frame on these scenes.
 const FRAMES: u32 = 8;
 
-fn aaps(name: &str, size: u32, photons: Option<u64>, settings: AapsSettings) -> RenderReport {
-    run(RenderJob {
+fn aaps_job(name: &str, size: u32, photons: Option<u64>, settings: AapsSettings) -> RenderJob {
+    RenderJob {
         scene: scene(name),
         technique: CausticsTechnique::Aaps,
         width: size,
@@ -24,8 +24,11 @@ fn aaps(name: &str, size: u32, photons: Option<u64>, settings: AapsSettings) -> 
         frames: FRAMES,
         aaps: settings,
         ..Default::default()
-    })
-    .unwrap_or_else(|e| panic!("{name}: {e}"))
+    }
+}
+
+fn aaps(name: &str, size: u32, photons: Option<u64>, settings: AapsSettings) -> RenderReport {
+    run(aaps_job(name, size, photons, settings)).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// Mean caustic irradiance over the interior of the lit region of `mirror_wall` and
@@ -136,19 +139,28 @@ fn aaps_error_falls_with_budget() {
     if !require_gpu() {
         return;
     }
-    for name in ["glass_sphere", "ring"] {
+    // One app renders the six jobs in turn (`run_all`: scenes loaded one after another).
+    let scenes = ["glass_sphere", "ring"];
+    let jobs = scenes
+        .iter()
+        .flat_map(|name| AAPS_LEVELS.map(|(_, photons, area)| (name, photons, area)))
+        .map(|(name, photons, target_area)| {
+            let settings = AapsSettings {
+                target_area,
+                ..Default::default()
+            };
+            aaps_job(name, 128, Some(photons), settings)
+        })
+        .collect();
+    let mut reports = run_all(jobs).into_iter();
+    for name in scenes {
         let reference = reference(name);
         let mut rmse = Vec::new();
-        for (level, photons, target_area) in AAPS_LEVELS {
-            let report = aaps(
-                name,
-                128,
-                Some(photons),
-                AapsSettings {
-                    target_area,
-                    ..Default::default()
-                },
-            );
+        for (level, _, _) in AAPS_LEVELS {
+            let report = reports
+                .next()
+                .expect("one result per job")
+                .unwrap_or_else(|e| panic!("{name} {level}: {e}"));
             let m = compare(report.caustics.as_ref().unwrap(), &reference, None).unwrap();
             println!(
                 "{name} {level}: {} photons, RMSE {:.1} lx, FLIP {:.4}, energy {:+.2} %",
