@@ -144,6 +144,9 @@ fn run_app(mut jobs: Vec<RenderJob>) -> Vec<Result<RenderReport, String>> {
     if job.mark_lights {
         app.add_systems(Update, crate::mark_every_light);
     }
+    if let Some(hook) = job.app_hook {
+        hook(&mut app);
+    }
     super::render_watch::watch_render_world(&mut app, &shared);
     app.run();
     let Ok(mut o) = shared.0.lock() else {

@@ -56,6 +56,10 @@ pub struct RenderJob {
     pub hook: Option<fn(&mut World)>,
     /// Called on the world at every measured frame with the frame's index (stress tests).
     pub per_frame: Option<fn(&mut World, u32)>,
+    /// Called once on the app after its plugins are added, before it runs (tests add
+    /// render-world systems with it). In a batch ([`super::run_all`]) the first job's applies
+    /// to the whole app.
+    pub app_hook: Option<fn(&mut App)>,
     /// Give every light of the scene a `CausticLight` (default true).
     pub mark_lights: bool,
     /// Insert `DefaultOpaqueRendererMethod::forward()` after the plugin (which otherwise makes
@@ -119,6 +123,7 @@ impl Default for RenderJob {
             ev100: None,
             hook: None,
             per_frame: None,
+            app_hook: None,
             mark_lights: true,
             forward: false,
             limits: None,

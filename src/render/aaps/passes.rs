@@ -117,7 +117,12 @@ pub fn aaps_passes(
     let splat_msaa = pipelines
         .splat_msaa
         .and_then(|id| cache.get_render_pipeline(id));
-    if compute.len() != pipelines.compute.len() {
+    // Nothing runs until every pass of the frame can: a frame without its small splats, or
+    // one the temporal stage did not take, would be kept in the settled mean.
+    if compute.len() != pipelines.compute.len()
+        || (state.msaa.is_some() && splat_msaa.is_none())
+        || !temporal::ready(temporal, temporal_pipelines.as_deref(), &cache)
+    {
         return;
     }
     let [

@@ -491,6 +491,12 @@ pub fn prepare_aaps_views(
                 fresh.as_mut().unwrap()
             }
         };
+        // The sample rotation moves on after a frame that traced: while a pipeline compiles
+        // the passes return early (`render::settle`), and the sample they did not draw is the
+        // next frame's, so a view settles on the same samples however late its pipelines are.
+        if state.prev_clip_from_world.is_some() && settle.is_none_or(|s| s.last_ran) {
+            state.frame = state.frame.wrapping_add(1);
+        }
         let clip_from_world = crate::render::clip_from_world(view);
         let eye = view.world_from_view.translation();
         let bytes = params_bytes(
@@ -510,7 +516,6 @@ pub fn prepare_aaps_views(
             .collect();
         queue.write_buffer(&state.world_from_clip, 0, &inv);
         state.prev_clip_from_world = Some(clip_from_world);
-        state.frame = state.frame.wrapping_add(1);
         e.insert((
             AapsFrame,
             TemporalAccumulation {

@@ -366,9 +366,24 @@ fn params_bytes(
     bytes
 }
 
+/// Whether a view's stage can run this frame: it has none, or its pipeline is compiled. A
+/// technique whose history is the stage's alone (AAPS) runs nothing while the stage compiles:
+/// a frame it traced that the stage did not take would still count towards settling, and the
+/// view would keep a mean short of those frames. The photon map and image space need not wait:
+/// they pass their own mean with its frame count, which loses no frame
+/// (`per_frame::change::a_view_settles_on_every_frame_it_counted`).
+pub fn ready(
+    temporal: Option<&ViewTemporal>,
+    pipelines: Option<&TemporalPipelines>,
+    cache: &PipelineCache,
+) -> bool {
+    temporal.is_none()
+        || pipelines.is_some_and(|p| cache.get_compute_pipeline(p.accumulate).is_some())
+}
+
 /// Combine the caustics buffer with the view's history and write the output back over it (one
 /// dispatch and one copy, span [`TEMPORAL_PASS`]). Does nothing while the pipeline compiles
-/// (the buffer then shows this frame's estimate alone).
+/// (the techniques check [`ready`] first).
 pub fn accumulate(
     ctx: &mut RenderContext,
     (cache, pipelines, span): (&PipelineCache, &TemporalPipelines, &SpanSettle),
