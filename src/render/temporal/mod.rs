@@ -369,9 +369,11 @@ fn params_bytes(
 /// Whether a view's stage can run this frame: it has none, or its pipeline is compiled. A
 /// technique whose history is the stage's alone (AAPS) runs nothing while the stage compiles:
 /// a frame it traced that the stage did not take would still count towards settling, and the
-/// view would keep a mean short of those frames. The photon map and image space need not wait:
-/// they pass their own mean with its frame count, which loses no frame
-/// (`per_frame::change::a_view_settles_on_every_frame_it_counted`).
+/// view would keep a mean short of those frames (test
+/// `per_frame::change::a_view_settles_on_every_frame_it_counted`). The photon map and image
+/// space need not wait: they pass their own mean with its frame count, which loses no frame
+/// (measured at stop 48 with the stage held 10 frames: their kept buffers were identical to
+/// the unheld runs').
 pub fn ready(
     temporal: Option<&ViewTemporal>,
     pipelines: Option<&TemporalPipelines>,
@@ -383,7 +385,8 @@ pub fn ready(
 
 /// Combine the caustics buffer with the view's history and write the output back over it (one
 /// dispatch and one copy, span [`TEMPORAL_PASS`]). Does nothing while the pipeline compiles
-/// (the techniques check [`ready`] first).
+/// (AAPS checks [`ready`] first; the photon map's and image space's buffers then show their own
+/// mean).
 pub fn accumulate(
     ctx: &mut RenderContext,
     (cache, pipelines, span): (&PipelineCache, &TemporalPipelines, &SpanSettle),
