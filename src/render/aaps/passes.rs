@@ -7,8 +7,9 @@ use bevy::prelude::*;
 use bevy::render::diagnostic::{DiagnosticsRecorder, RecordDiagnostics};
 use bevy::render::render_resource::{
     BindGroup, BindGroupEntries, BindGroupEntry, BindingResource, BufferBinding,
-    ComputePassDescriptor, Extent3d, LoadOp, Operations, PipelineCache, RenderPassColorAttachment,
-    RenderPassDescriptor, RenderPipeline, StoreOp, TexelCopyTextureInfo, TextureView,
+    ComputePassDescriptor, ComputePipeline, Extent3d, LoadOp, Operations, PipelineCache,
+    RenderPassColorAttachment, RenderPassDescriptor, RenderPipeline, StoreOp, TexelCopyTextureInfo,
+    TextureView,
 };
 use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 
@@ -19,7 +20,7 @@ use crate::render::settle::ViewSettle;
 use crate::render::span::SpanSettle;
 use crate::render::temporal::{self, TemporalPipelines, ViewTemporal};
 use crate::render::trace::scene::TraceSceneBuffers;
-use crate::render::trace::{TraceSpecialization, wanted_features};
+use crate::render::trace::{TraceFeatures, TraceSpecialization, wanted_features};
 use crate::render::{CausticsDispatchLog, ViewCausticsBuffer};
 
 /// GPU span and log names of the passes.
@@ -106,25 +107,13 @@ pub fn aaps_passes(
     let Some(depth) = prepass.depth_view() else {
         return;
     };
-    let compute: Vec<_> = pipelines
-        .compute
-        .iter()
-        .filter_map(|id| cache.get_compute_pipeline(*id))
-        .collect();
-    let Some(splat) = cache.get_render_pipeline(pipelines.splat) else {
+    let ready = temporal::ready(temporal, temporal_pipelines.as_deref(), &cache);
+    let features = wanted_features(&scene, specialization.as_deref());
+    let Some(frame) = frame_pipelines(&cache, &pipelines, features, state.msaa.is_some(), ready)
+    else {
         return;
     };
-    let splat_msaa = pipelines
-        .splat_msaa
-        .and_then(|id| cache.get_render_pipeline(id));
-    // Nothing runs until every pass of the frame can: a frame without its small splats, or
-    // one the temporal stage did not take, would be kept in the settled mean.
-    if compute.len() != pipelines.compute.len()
-        || (state.msaa.is_some() && splat_msaa.is_none())
-        || !temporal::ready(temporal, temporal_pipelines.as_deref(), &cache)
-    {
-        return;
-    }
+    let (splat, splat_msaa, trace) = (frame.splat, frame.splat_msaa, frame.trace);
     let [
         leaves,
         reduce,
@@ -133,15 +122,7 @@ pub fn aaps_passes(
         variance,
         update,
         scale,
-    ] = [0, 1, 2, 3, 4, 5, 6].map(|i| compute[i]);
-    // The scene's specialised tracer (none this frame while it compiles).
-    let Some(trace) = pipelines
-        .trace
-        .get(wanted_features(&scene, specialization.as_deref()))
-        .and_then(|id| cache.get_compute_pipeline(id))
-    else {
-        return;
-    };
+    ] = frame.compute;
     let groups = bind_groups(
         ctx.render_device(),
         &cache,
@@ -265,6 +246,58 @@ pub fn aaps_passes(
     }
     blend(&mut ctx, depth);
     view_settle.inspect(|s| s.mark_ran());
+}
+
+/// The pipelines of one AAPS frame.
+struct FramePipelines<'a> {
+    /// `[leaves, reduce, trace_args, draw_args, variance, update, scale]`.
+    compute: [&'a ComputePipeline; 7],
+    /// The scene's specialised tracer.
+    trace: &'a ComputePipeline,
+    splat: &'a RenderPipeline,
+    splat_msaa: Option<&'a RenderPipeline>,
+}
+
+/// The frame's pipelines once every pass of the frame can run, `None` while any compiles: a
+/// frame without its small splats (`msaa`: the view draws them), or one the temporal stage did
+/// not take (`temporal_ready`), would be kept in the settled mean.
+fn frame_pipelines<'a>(
+    cache: &'a PipelineCache,
+    pipelines: &AapsPipelines,
+    features: TraceFeatures,
+    msaa: bool,
+    temporal_ready: bool,
+) -> Option<FramePipelines<'a>> {
+    let compute = pipelines.compute.map(|id| cache.get_compute_pipeline(id));
+    let splat_msaa = pipelines
+        .splat_msaa
+        .and_then(|id| cache.get_render_pipeline(id));
+    if !temporal_ready || (msaa && splat_msaa.is_none()) {
+        return None;
+    }
+    let [
+        leaves,
+        reduce,
+        trace_args,
+        draw_args,
+        variance,
+        update,
+        scale,
+    ] = compute;
+    Some(FramePipelines {
+        compute: [
+            leaves?,
+            reduce?,
+            trace_args?,
+            draw_args?,
+            variance?,
+            update?,
+            scale?,
+        ],
+        trace: cache.get_compute_pipeline(pipelines.trace.get(features)?)?,
+        splat: cache.get_render_pipeline(pipelines.splat)?,
+        splat_msaa,
+    })
 }
 
 /// The task buffer: quadtree leaves from the density atlas, reduction to the root, and the
