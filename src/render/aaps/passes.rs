@@ -268,32 +268,19 @@ fn frame_pipelines<'a>(
     msaa: bool,
     temporal_ready: bool,
 ) -> Option<FramePipelines<'a>> {
-    let compute = pipelines.compute.map(|id| cache.get_compute_pipeline(id));
     let splat_msaa = pipelines
         .splat_msaa
         .and_then(|id| cache.get_render_pipeline(id));
     if !temporal_ready || (msaa && splat_msaa.is_none()) {
         return None;
     }
-    let [
-        leaves,
-        reduce,
-        trace_args,
-        draw_args,
-        variance,
-        update,
-        scale,
-    ] = compute;
+    let compute: Vec<_> = pipelines
+        .compute
+        .iter()
+        .map(|id| cache.get_compute_pipeline(*id))
+        .collect::<Option<_>>()?;
     Some(FramePipelines {
-        compute: [
-            leaves?,
-            reduce?,
-            trace_args?,
-            draw_args?,
-            variance?,
-            update?,
-            scale?,
-        ],
+        compute: compute.try_into().ok()?,
         trace: cache.get_compute_pipeline(pipelines.trace.get(features)?)?,
         splat: cache.get_render_pipeline(pipelines.splat)?,
         splat_msaa,
