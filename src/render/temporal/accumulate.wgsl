@@ -21,6 +21,15 @@
 // better as its mean grows, while the prior can weigh for max_history frames. A view in which
 // the scene has not changed for max_history frames is not tested: the estimates differ by noise
 // only, and the mean converges.
+//
+// A caustic moves with its caster, and the view's depth says nothing of that motion. On a frame
+// in which the scene changed where a caustic can and the camera did not move (`FLAG_MOTION`;
+// not on the frames after it, where a still caustic's noise alone would pick shifts),
+// `motion` first matches each 8x8 tile of the estimate against the last output shifted by up
+// to MOTION_RADIUS pixels (block matching, the sum of absolute luminance differences), and
+// `accumulate` takes the tile's history from where it matched best. A shift is taken only when
+// it fits better than none by MOTION_MARGIN, so noise does not move a caustic that stood
+// still; the clamp then judges the shifted history as any other.
 
 struct TemporalParams {
     size: vec2<u32>,
@@ -39,6 +48,17 @@ const FLAG_RESET: u32 = 1u;
 const FLAG_CLAMP: u32 = 2u;
 const FLAG_SURFACES: u32 = 4u;
 const FLAG_REPROJECT: u32 = 8u;
+const FLAG_MOTION: u32 = 16u;
+
+// Side of a motion tile (px), the largest shift searched (px) and the share by which a shift
+// must lower the tile's difference below that of no shift.
+const MOTION_TILE: u32 = 8u;
+const MOTION_RADIUS: i32 = 2;
+const MOTION_SHIFTS: u32 = 25u; // (2 MOTION_RADIUS + 1)^2
+const MOTION_MARGIN: f32 = 0.02;
+// The clamp's window is this many times wider for a history taken from a matched shift: the
+// resampled history differs from the estimate by its interpolation as well as by noise.
+const MOTION_CLAMP_WIDEN: f32 = 3.0;
 
 @group(0) @binding(0) var<uniform> params: TemporalParams;
 // This frame's estimate (the caustics buffer).
@@ -52,6 +72,9 @@ const FLAG_REPROJECT: u32 = 8u;
 @group(0) @binding(6) var view_depth: texture_depth_2d;
 @group(0) @binding(7) var depth_in: texture_2d<f32>;
 @group(0) @binding(8) var depth_out: texture_storage_2d<r32float, write>;
+// Per motion tile (row-major, ceil(size / MOTION_TILE)): the shift from the tile's pixels to
+// where their history lies, x + 128 in bits 0..8 and y + 128 in bits 8..16.
+@group(0) @binding(9) var<storage, read_write> tile_motion: array<u32>;
 
 fn lum(c: vec3<f32>) -> f32 {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));
@@ -124,6 +147,133 @@ fn same_surface(a: f32, b: f32) -> bool {
     return abs(a - b) <= params.depth_tolerance * max(a, b);
 }
 
+var<workgroup> shift_cost: array<f32, MOTION_SHIFTS>;
+var<workgroup> shift_best: vec2<f32>;
+
+fn shift_of(i: u32) -> vec2<f32> {
+    let side = u32(2 * MOTION_RADIUS + 1);
+    return vec2(f32(i % side), f32(i / side)) - f32(MOTION_RADIUS);
+}
+
+// Luminance of the last output at pixel position `x` (pixel centres at .5), bilinear; 0 off
+// screen.
+fn last_lum(x: vec2<f32>) -> f32 {
+    let f = x - 0.5;
+    let i = vec2<i32>(floor(f));
+    let t = f - floor(f);
+    let size = vec2<i32>(params.size);
+    var c = 0.0;
+    for (var k = 0; k < 4; k += 1) {
+        let o = vec2(k & 1, k >> 1);
+        let q = i + o;
+        if all(q >= vec2(0)) && all(q < size) {
+            let w = mix(1.0 - t, t, vec2<f32>(o));
+            c += w.x * w.y * lum(clean(textureLoad(last_in, q, 0)).rgb);
+        }
+    }
+    return c;
+}
+
+// Sum over the tile's pixels of |lum(estimate) - lum(last output shifted by `s` px)|.
+fn tile_cost(tile: vec2<u32>, s: vec2<f32>) -> f32 {
+    var c = 0.0;
+    let size = vec2<i32>(params.size);
+    for (var i = 0u; i < MOTION_TILE * MOTION_TILE; i += 1u) {
+        let p = vec2<i32>(tile * MOTION_TILE + vec2(i % MOTION_TILE, i / MOTION_TILE));
+        if any(p >= size) {
+            continue;
+        }
+        let now = lum(clean(textureLoad(current, p, 0)).rgb);
+        c += abs(now - last_lum(vec2<f32>(p) + 0.5 - s));
+    }
+    return c;
+}
+
+// The best of `count` costs (the first on a tie).
+fn best_cost(count: u32) -> u32 {
+    var best = 0u;
+    for (var i = 1u; i < count; i += 1u) {
+        if shift_cost[i] < shift_cost[best] {
+            best = i;
+        }
+    }
+    return best;
+}
+
+// One workgroup per motion tile, coarse to fine: MOTION_SHIFTS threads score the whole-pixel
+// shifts, then 9 score the best one and its neighbours half a pixel away, then a quarter. The
+// shift is kept when it fits better than none by MOTION_MARGIN (else none).
+@compute @workgroup_size(32)
+fn motion(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li < MOTION_SHIFTS {
+        shift_cost[li] = tile_cost(wg.xy, shift_of(li));
+    }
+    workgroupBarrier();
+    let still = shift_cost[(MOTION_SHIFTS - 1u) / 2u];
+    if li == 0u {
+        shift_best = shift_of(best_cost(MOTION_SHIFTS));
+    }
+    workgroupBarrier();
+    for (var step = 0.5; step > 0.2; step *= 0.5) {
+        let centre = shift_best;
+        workgroupBarrier();
+        if li < 9u {
+            let o = vec2(f32(li % 3u), f32(li / 3u)) - 1.0;
+            shift_cost[li] = tile_cost(wg.xy, centre + step * o);
+        }
+        workgroupBarrier();
+        if li == 0u {
+            let b = best_cost(9u);
+            shift_best = centre + step * (vec2(f32(b % 3u), f32(b / 3u)) - 1.0);
+            if !(shift_cost[b] < (1.0 - MOTION_MARGIN) * still) {
+                shift_best = vec2(0.0);
+            }
+        }
+        workgroupBarrier();
+    }
+    if li == 0u {
+        let tiles = (params.size + MOTION_TILE - 1u) / MOTION_TILE;
+        tile_motion[wg.y * tiles.x + wg.x] = pack2x16float(shift_best);
+    }
+}
+
+// The shift of pixel `p`'s tile (`motion`'s result), pixels.
+fn moved_by(p: vec2<i32>) -> vec2<f32> {
+    let tiles = (params.size + MOTION_TILE - 1u) / MOTION_TILE;
+    let t = vec2<u32>(p) / MOTION_TILE;
+    return unpack2x16float(tile_motion[t.y * tiles.x + t.x]);
+}
+
+// Catmull-Rom weights of the four texels around a sample at fraction `t` past the second.
+fn catmull_rom(t: f32) -> vec4<f32> {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    return vec4(
+        -0.5 * t3 + t2 - 0.5 * t,
+        1.5 * t3 - 2.5 * t2 + 1.0,
+        -1.5 * t3 + 2.0 * t2 + 0.5 * t,
+        0.5 * t3 - 0.5 * t2,
+    );
+}
+
+// `tex` at pixel position `x` (pixel centres at .5), Catmull-Rom (sharp: a history resampled on
+// every frame of a moving caustic blurs less than bilinear), edges clamped, kept >= 0 and finite.
+fn resampled(tex: texture_2d<f32>, x: vec2<f32>) -> vec4<f32> {
+    let f = x - 0.5;
+    let i = vec2<i32>(floor(f));
+    let wx = catmull_rom(f.x - floor(f.x));
+    let wy = catmull_rom(f.y - floor(f.y));
+    let hi = vec2<i32>(params.size) - 1;
+    var c = vec4(0.0);
+    for (var y = 0; y < 4; y += 1) {
+        for (var x = 0; x < 4; x += 1) {
+            let q = clamp(i + vec2(x - 1, y - 1), vec2(0), hi);
+            c += wx[x] * wy[y] * clean(textureLoad(tex, q, 0));
+        }
+    }
+    return clean(vec4(max(c.rgb, vec3(0.0)), max(c.a, 0.0)));
+}
+
 @compute @workgroup_size(8, 8)
 fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     if any(gid.xy >= params.size) {
@@ -149,7 +299,23 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
         // reach): a pixel whose depth moved shows another surface.
         other = !same_surface(z, textureLoad(depth_in, p, 0).r);
     }
-    let stored = clean(textureLoad(prior_in, h, 0));
+    // The caustic moved with its caster: the history lies where the tile matched, on the same
+    // surface.
+    var shift = vec2(0.0);
+    if (params.flags & FLAG_MOTION) != 0u {
+        shift = moved_by(p);
+        let m = vec2<i32>(floor(vec2<f32>(p) + 0.5 - shift));
+        if all(m >= vec2(0)) && all(m < vec2<i32>(params.size)) {
+            other = other || !same_surface(z, textureLoad(depth_in, m, 0).r);
+        } else {
+            shift = vec2(0.0);
+        }
+    }
+    let x = vec2<f32>(h) + 0.5 - shift;
+    var stored = clean(textureLoad(prior_in, h, 0));
+    if any(shift != vec2(0.0)) {
+        stored = resampled(prior_in, x);
+    }
     var prior = stored.rgb;
     var n = max(stored.a, 0.0);
     if (params.flags & FLAG_RESET) != 0u {
@@ -157,6 +323,9 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
         n = 0.0;
     } else if k <= 1.0 {
         prior = clean(textureLoad(last_in, h, 0)).rgb;
+        if any(shift != vec2(0.0)) {
+            prior = resampled(last_in, x).rgb;
+        }
         n += max(params.k_last, 1.0);
     }
     if other {
@@ -166,7 +335,8 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     if n > 0.0 && (params.flags & FLAG_CLAMP) != 0u {
         let ms = neighbourhood(p);
         let hl = lum(prior);
-        let c = clamp(hl, max(ms.x - params.gamma * ms.y, 0.0), ms.x + params.gamma * ms.y);
+        let gamma = params.gamma * select(1.0, MOTION_CLAMP_WIDEN, any(shift != vec2(0.0)));
+        let c = clamp(hl, max(ms.x - gamma * ms.y, 0.0), ms.x + gamma * ms.y);
         if c != hl {
             prior = with_luminance(prior, now.rgb, c);
             n = min(n, params.clamped_history);

@@ -15,17 +15,20 @@
 //! | change since the last frame | history |
 //! | --- | --- |
 //! | none | kept whole: the new estimate differs from it by noise only |
-//! | the scene only (a light, a caster, a receiver or a material) | dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard errors of that mean ([`CLAMPED_HISTORY`]), kept elsewhere; tested again on each of the next [`TemporalAccumulation::max_history`] frames |
+//! | the scene only (a light, a caster, a receiver or a material) | taken from where the caustic moved (each [`MOTION_TILE`]² tile's best-fitting shift of the last output, to a quarter pixel, when it fits 2 % better than none), then dropped per pixel where it lies outside the estimate's 3x3 luminance mean ± [`TemporalAccumulation::clamp_sigma`] standard errors of that mean (3 times as wide for a shifted history; [`CLAMPED_HISTORY`]), kept elsewhere; tested again on each of the next [`TemporalAccumulation::max_history`] frames |
 //! | the camera alone (the scene at most as above without a caustic change) | reprojected: each pixel takes the history of the pixel that showed its surface last frame (its world position through last frame's `clip_from_world`), dropped where that was off screen or showed another surface (depth) |
 //! | the viewport, the settings, the buffer | dropped |
 //!
 //! So a light that jitters or a far object that moves keeps the history where the caustic did
-//! not change, and a moved caustic leaves no ghost. A view that settles
+//! not change, a caustic that moves with its caster keeps its history (`docs/temporal.md`, "A
+//! moving caster"), and a moved caustic leaves no ghost. A view that settles
 //! ([`crate::Caustics::settle_frames`]) keeps the output it reached.
 //!
-//! Cost: 64 bytes per pixel (two of each of the `Rgba32Float` prior and last output, read one
-//! frame and written the next), one compute dispatch reading 12 texels per pixel, and one copy
-//! of the view-sized output into the caustics buffer per frame.
+//! Cost: 72 bytes per pixel (two of each of the `Rgba32Float` prior and last output and the
+//! `R32Float` depth, read one frame and written the next) and 4 bytes per motion tile, one
+//! compute dispatch reading 12 texels per pixel (up to 32 where a shifted history is
+//! resampled), and one copy of the view-sized output into the caustics buffer per frame; on a
+//! frame in which a caustic changed, one more dispatch (41 shifts x 64 bilinear reads per tile).
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
 
@@ -73,6 +76,10 @@ const FLAG_RESET: u32 = 1;
 const FLAG_CLAMP: u32 = 2;
 const FLAG_SURFACES: u32 = 4;
 const FLAG_REPROJECT: u32 = 8;
+const FLAG_MOTION: u32 = 16;
+
+/// Side of a caustic-motion tile, pixels (`MOTION_TILE` in `accumulate.wgsl`).
+pub const MOTION_TILE: u32 = 8;
 
 /// Bytes of the stage's parameters (`TemporalParams` in `accumulate.wgsl`).
 const PARAMS_BYTES: u64 = 112;
@@ -104,6 +111,10 @@ pub struct ViewTemporal {
     /// `R32Float`: the view's depth (reverse-Z NDC) the history belongs to; two, in turn.
     depth: [(Texture, TextureView); 2],
     params: Buffer,
+    /// Per [`MOTION_TILE`] tile: where its history lies (`accumulate.wgsl`'s `motion`).
+    tile_motion: Buffer,
+    /// This frame's `FLAG_*` bits.
+    flags: AtomicU32,
     /// The history read next.
     read: AtomicUsize,
     /// The next run drops the history (set by a change, cleared by a run).
@@ -124,7 +135,9 @@ pub struct ViewTemporal {
 impl ViewTemporal {
     /// GPU bytes held (`render::memory`).
     pub fn gpu_bytes(&self) -> u64 {
-        self.size.x as u64 * self.size.y as u64 * TEMPORAL_BYTES_PER_PIXEL + self.params.size()
+        self.size.x as u64 * self.size.y as u64 * TEMPORAL_BYTES_PER_PIXEL
+            + self.params.size()
+            + self.tile_motion.size()
     }
 }
 
@@ -133,6 +146,7 @@ impl ViewTemporal {
 pub struct TemporalPipelines {
     layout: BindGroupLayoutDescriptor,
     accumulate: CachedComputePipelineId,
+    motion: CachedComputePipelineId,
 }
 
 #[derive(Resource)]
@@ -176,17 +190,25 @@ fn init_pipelines(mut commands: Commands, cache: Res<PipelineCache>, shader: Res
                 texture_depth_2d(),
                 texture_2d(float),
                 texture_storage_2d(TextureFormat::R32Float, StorageTextureAccess::WriteOnly),
+                storage_buffer_sized(false, None),
             ),
         ),
     );
-    let accumulate = cache.queue_compute_pipeline(ComputePipelineDescriptor {
-        label: Some("caustics:pipeline:temporal_accumulate".into()),
-        layout: vec![layout.clone()],
-        shader: shader.0.clone(),
-        entry_point: Some("accumulate".into()),
-        ..default()
+    let pipeline = |name: &'static str| {
+        cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some(format!("caustics:pipeline:temporal_{name}").into()),
+            layout: vec![layout.clone()],
+            shader: shader.0.clone(),
+            entry_point: Some(name.into()),
+            ..default()
+        })
+    };
+    let (accumulate, motion) = (pipeline("accumulate"), pipeline("motion"));
+    commands.insert_resource(TemporalPipelines {
+        layout,
+        accumulate,
+        motion,
     });
-    commands.insert_resource(TemporalPipelines { layout, accumulate });
 }
 
 fn history_texture(
@@ -228,6 +250,13 @@ impl ViewTemporal {
                 usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
+            tile_motion: device.create_buffer(&BufferDescriptor {
+                label: Some("caustics_temporal_tile_motion"),
+                size: 4 * u64::from(size.x.div_ceil(MOTION_TILE) * size.y.div_ceil(MOTION_TILE)),
+                usage: BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+            flags: AtomicU32::new(0),
             read: AtomicUsize::new(0),
             reset: AtomicBool::new(true),
             surfaces: AtomicBool::new(false),
@@ -278,6 +307,7 @@ pub fn prepare_temporal(
         };
         let now = super::clip_from_world(view);
         let reproject = note_change(temporal, request, settle, new);
+        let caustic_changed = settle.is_some_and(|s| s.change == SettleChange::Scene);
         let flags = if temporal.reset.load(Ordering::Relaxed) {
             FLAG_RESET
         } else {
@@ -285,7 +315,9 @@ pub fn prepare_temporal(
             on(temporal.probation.load(Ordering::Relaxed) > 0, FLAG_CLAMP)
                 | on(temporal.surfaces.load(Ordering::Relaxed), FLAG_SURFACES)
                 | on(reproject, FLAG_REPROJECT)
+                | on(caustic_changed && !reproject, FLAG_MOTION)
         };
+        temporal.flags.store(flags, Ordering::Relaxed);
         let k = request.frames.max(1) as f32;
         temporal.k.store(k.to_bits(), Ordering::Relaxed);
         // Last frame's clip from this frame's clip, in f64 (a reverse-Z projection's inverse
@@ -380,7 +412,11 @@ pub fn ready(
     cache: &PipelineCache,
 ) -> bool {
     temporal.is_none()
-        || pipelines.is_some_and(|p| cache.get_compute_pipeline(p.accumulate).is_some())
+        || pipelines.is_some_and(|p| {
+            [p.accumulate, p.motion]
+                .iter()
+                .all(|&id| cache.get_compute_pipeline(id).is_some())
+        })
 }
 
 /// Combine the caustics buffer with the view's history and write the output back over it (one
@@ -394,7 +430,10 @@ pub fn accumulate(
     (buffer, depth): (&ViewCausticsBuffer, &TextureView),
     log: &CausticsDispatchLog,
 ) {
-    let Some(pipeline) = cache.get_compute_pipeline(pipelines.accumulate) else {
+    let (Some(pipeline), Some(motion)) = (
+        cache.get_compute_pipeline(pipelines.accumulate),
+        cache.get_compute_pipeline(pipelines.motion),
+    ) else {
         return;
     };
     if temporal.size != buffer.size {
@@ -415,6 +454,7 @@ pub fn accumulate(
             depth,
             &temporal.depth[r].1,
             &temporal.depth[w].1,
+            temporal.tile_motion.as_entire_binding(),
         )),
     );
     let diagnostics = ctx.diagnostic_recorder();
@@ -428,8 +468,13 @@ pub fn accumulate(
             });
         let s = diagnostics.pass_span(&mut pass, TEMPORAL_PASS);
         span.settle(&mut pass);
-        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &group, &[]);
+        if temporal.flags.load(Ordering::Relaxed) & FLAG_MOTION != 0 {
+            pass.set_pipeline(motion);
+            let (x, y) = (buffer.size.x, buffer.size.y);
+            pass.dispatch_workgroups(x.div_ceil(MOTION_TILE), y.div_ceil(MOTION_TILE), 1);
+        }
+        pass.set_pipeline(pipeline);
         pass.dispatch_workgroups(buffer.size.x.div_ceil(8), buffer.size.y.div_ceil(8), 1);
         s.end(&mut pass);
     }
