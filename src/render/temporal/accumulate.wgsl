@@ -26,10 +26,11 @@
 // in which the scene changed where a caustic can and the camera did not move (`FLAG_MOTION`;
 // not on the frames after it, where a still caustic's noise alone would pick shifts),
 // `motion` first matches each 8x8 tile of the estimate against the last output shifted by up
-// to MOTION_RADIUS pixels (block matching, the sum of absolute luminance differences), and
-// `accumulate` takes the tile's history from where it matched best. A shift is taken only when
-// it fits better than none by MOTION_MARGIN, so noise does not move a caustic that stood
-// still; the clamp then judges the shifted history as any other.
+// to MOTION_RADIUS pixels (block matching, the sum of absolute luminance differences; whole
+// pixels, then half and quarter pixels around the best, bilinear), and `accumulate` takes the
+// tile's history from where it matched best (Catmull-Rom). A shift is taken only when it fits
+// better than none by MOTION_MARGIN, so noise does not move a caustic that stood still; the
+// clamp then judges the shifted history in a window MOTION_CLAMP_WIDEN times as wide.
 
 struct TemporalParams {
     size: vec2<u32>,
@@ -73,7 +74,7 @@ const MOTION_CLAMP_WIDEN: f32 = 3.0;
 @group(0) @binding(7) var depth_in: texture_2d<f32>;
 @group(0) @binding(8) var depth_out: texture_storage_2d<r32float, write>;
 // Per motion tile (row-major, ceil(size / MOTION_TILE)): the shift from the tile's pixels to
-// where their history lies, x + 128 in bits 0..8 and y + 128 in bits 8..16.
+// where their history lies, pixels (`pack2x16float`).
 @group(0) @binding(9) var<storage, read_write> tile_motion: array<u32>;
 
 fn lum(c: vec3<f32>) -> f32 {
