@@ -36,9 +36,10 @@ use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
     BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
-    BufferUsages, CachedComputePipelineId, ComputePassDescriptor, ComputePipelineDescriptor,
-    Extent3d, PipelineCache, ShaderStages, StorageTextureAccess, TexelCopyTextureInfo, Texture,
-    TextureFormat, TextureSampleType, TextureUsages, TextureView, binding_types,
+    BufferUsages, CachedComputePipelineId, ComputePassDescriptor, ComputePipeline,
+    ComputePipelineDescriptor, Extent3d, PipelineCache, ShaderStages, StorageTextureAccess,
+    TexelCopyTextureInfo, Texture, TextureFormat, TextureSampleType, TextureUsages, TextureView,
+    binding_types,
 };
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue};
 use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
@@ -411,12 +412,19 @@ pub fn ready(
     pipelines: Option<&TemporalPipelines>,
     cache: &PipelineCache,
 ) -> bool {
-    temporal.is_none()
-        || pipelines.is_some_and(|p| {
-            [p.accumulate, p.motion]
-                .iter()
-                .all(|&id| cache.get_compute_pipeline(id).is_some())
-        })
+    temporal.is_none() || pipelines.is_some_and(|p| p.compiled(cache).is_some())
+}
+
+impl TemporalPipelines {
+    /// The accumulate and motion pipelines, once both are compiled.
+    fn compiled<'a>(
+        &self,
+        cache: &'a PipelineCache,
+    ) -> Option<(&'a ComputePipeline, &'a ComputePipeline)> {
+        cache
+            .get_compute_pipeline(self.accumulate)
+            .zip(cache.get_compute_pipeline(self.motion))
+    }
 }
 
 /// Combine the caustics buffer with the view's history and write the output back over it (one
@@ -430,10 +438,7 @@ pub fn accumulate(
     (buffer, depth): (&ViewCausticsBuffer, &TextureView),
     log: &CausticsDispatchLog,
 ) {
-    let (Some(pipeline), Some(motion)) = (
-        cache.get_compute_pipeline(pipelines.accumulate),
-        cache.get_compute_pipeline(pipelines.motion),
-    ) else {
+    let Some((pipeline, motion)) = pipelines.compiled(cache) else {
         return;
     };
     if temporal.size != buffer.size {
