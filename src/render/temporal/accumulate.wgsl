@@ -26,7 +26,8 @@
 // in which the scene changed where a caustic can and the camera did not move (`FLAG_MOTION`;
 // not on the frames after it, where a still caustic's noise alone would pick shifts),
 // `motion` first matches each 8x8 tile of the estimate against the last output shifted by up
-// to MOTION_RADIUS pixels (block matching, the sum of absolute luminance differences; whole
+// to MOTION_RADIUS pixels (block matching, the sum of absolute differences of the luminance
+// of MOTION_BLOCK² blocks, which a noisy estimate disturbs less than single pixels; whole
 // pixels, then half and quarter pixels around the best, bilinear), and `accumulate` takes the
 // tile's history from where it matched best (Catmull-Rom). A shift is taken only when it fits
 // better than none by MOTION_MARGIN, so noise does not move a caustic that stood still; the
@@ -57,6 +58,10 @@ const MOTION_TILE: u32 = 8u;
 const MOTION_RADIUS: i32 = 2;
 const MOTION_SHIFTS: u32 = 25u; // (2 MOTION_RADIUS + 1)^2
 const MOTION_MARGIN: f32 = 0.02;
+// Side of the blocks whose luminance sums the tile's cost compares (px). Sliding ball,
+// against converged references: single pixels AAPS 1.18x its still RMSE and the photon map
+// 1.42x, 2x2 blocks 1.09x and 1.37x, 4x4 blocks 1.22x and 1.49x.
+const MOTION_BLOCK: u32 = 2u;
 // The clamp's window is this many times wider for a history taken from a matched shift: the
 // resampled history differs from the estimate by its interpolation as well as by noise.
 const MOTION_CLAMP_WIDEN: f32 = 3.0;
@@ -175,17 +180,24 @@ fn last_lum(x: vec2<f32>) -> f32 {
     return c;
 }
 
-// Sum over the tile's pixels of |lum(estimate) - lum(last output shifted by `s` px)|.
+// Sum over the tile's 2x2 pixel blocks of |Σ lum(estimate) - Σ lum(last output shifted by
+// `s` px)|: a block's sum has half the noise of a pixel, so a noisy estimate still tells a
+// shift from none.
 fn tile_cost(tile: vec2<u32>, s: vec2<f32>) -> f32 {
     var c = 0.0;
     let size = vec2<i32>(params.size);
-    for (var i = 0u; i < MOTION_TILE * MOTION_TILE; i += 1u) {
-        let p = vec2<i32>(tile * MOTION_TILE + vec2(i % MOTION_TILE, i / MOTION_TILE));
-        if any(p >= size) {
-            continue;
+    let half = MOTION_TILE / MOTION_BLOCK;
+    for (var b = 0u; b < half * half; b += 1u) {
+        let corner = vec2<i32>(tile * MOTION_TILE + MOTION_BLOCK * vec2(b % half, b / half));
+        var d = 0.0;
+        for (var i = 0u; i < MOTION_BLOCK * MOTION_BLOCK; i += 1u) {
+            let p = corner + vec2<i32>(vec2(i % MOTION_BLOCK, i / MOTION_BLOCK));
+            if all(p < size) {
+                let now = lum(clean(textureLoad(current, p, 0)).rgb);
+                d += now - last_lum(vec2<f32>(p) + 0.5 - s);
+            }
         }
-        let now = lum(clean(textureLoad(current, p, 0)).rgb);
-        c += abs(now - last_lum(vec2<f32>(p) + 0.5 - s));
+        c += abs(d);
     }
     return c;
 }
