@@ -180,15 +180,15 @@ fn last_lum(x: vec2<f32>) -> f32 {
     return c;
 }
 
-// Sum over the tile's 2x2 pixel blocks of |Σ lum(estimate) - Σ lum(last output shifted by
-// `s` px)|: a block's sum has half the noise of a pixel, so a noisy estimate still tells a
-// shift from none.
+// Sum over the tile's MOTION_BLOCK² pixel blocks of |Σ lum(estimate) - Σ lum(last output
+// shifted by `s` px)|: a 2x2 block's sum has half a pixel's relative noise, so a noisy
+// estimate still tells a shift from none.
 fn tile_cost(tile: vec2<u32>, s: vec2<f32>) -> f32 {
     var c = 0.0;
     let size = vec2<i32>(params.size);
-    let half = MOTION_TILE / MOTION_BLOCK;
-    for (var b = 0u; b < half * half; b += 1u) {
-        let corner = vec2<i32>(tile * MOTION_TILE + MOTION_BLOCK * vec2(b % half, b / half));
+    let blocks = MOTION_TILE / MOTION_BLOCK; // per side
+    for (var b = 0u; b < blocks * blocks; b += 1u) {
+        let corner = vec2<i32>(tile * MOTION_TILE + MOTION_BLOCK * vec2(b % blocks, b / blocks));
         var d = 0.0;
         for (var i = 0u; i < MOTION_BLOCK * MOTION_BLOCK; i += 1u) {
             let p = corner + vec2<i32>(vec2(i % MOTION_BLOCK, i / MOTION_BLOCK));
