@@ -62,9 +62,10 @@ pub struct PhotonMapKey {
 pub const HISTORY_FRAMES: u32 = 32;
 
 /// The width of the stage's history clamp after a change of the scene, standard errors of the
-/// 3x3 mean ([`TemporalAccumulation::clamp_sigma`]; AAPS's is 1). A change restarts the
-/// progressive mean at the first frame's radius, so the estimate the history is judged against
-/// is blurred by its radius, not only noisy: at 1 the clamp dropped history that was right.
+/// 3x3 mean ([`TemporalAccumulation::clamp_sigma`]; AAPS asks for the stage's default,
+/// `temporal::DEFAULT_CLAMP_SIGMA`). A change restarts the progressive mean at the first
+/// frame's radius, so the estimate the history is judged against is blurred by its radius,
+/// not only noisy: at the default the clamp dropped history that was right.
 /// Measured on the sliding ball (`a_moving_caster_leaves_no_trail`, RMSE against converged
 /// references over the still run's): 1.68x at 1, 1.46x at 2, 1.45x at 3, 1.42x at 4, 1.41x
 /// with no clamp; no trail and no ghost at 4 (a surface that moved still drops its history).
