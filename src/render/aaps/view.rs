@@ -523,6 +523,7 @@ pub fn prepare_aaps_views(
                 max_history: state.settings.history_frames,
                 clamp_sigma: state.settings.history_clamp,
                 frames: 1,
+                spatial_passes: 0,
             },
         ));
         if let Some(s) = fresh {

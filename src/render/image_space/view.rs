@@ -656,6 +656,8 @@ fn temporal_request(state: &ImageSpaceViewState) -> Option<TemporalAccumulation>
         max_history: worth,
         clamp_sigma: crate::render::temporal::DEFAULT_CLAMP_SIGMA,
         frames: state.since_reset.clamp(1, worth),
+        // SVGF's own à-trous has filtered the estimate.
+        spatial_passes: 0,
     })
 }
 

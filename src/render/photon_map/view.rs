@@ -71,6 +71,10 @@ pub const HISTORY_FRAMES: u32 = 32;
 /// with no clamp; no trail and no ghost at 4 (a surface that moved still drops its history).
 pub const CLAMP_SIGMA: f32 = 4.0;
 
+/// À-trous iterations of the stage's spatial filter over the photon map's output
+/// ([`TemporalAccumulation::spatial_passes`]).
+pub const SPATIAL_PASSES: u32 = 2;
+
 /// What the progressive mean is of: any change starts it again. The scene enters by its
 /// caustic generation (`scene::change`): a mover outside the caustic light's reach or a light
 /// jittering within tolerance keeps the mean, and a moved receiver restarts only the pixels
@@ -420,6 +424,7 @@ pub fn prepare_photon_map_views(
                 max_history: HISTORY_FRAMES,
                 clamp_sigma: CLAMP_SIGMA,
                 frames: state_frame,
+                spatial_passes: SPATIAL_PASSES,
             });
         } else {
             e.remove::<TemporalAccumulation>();

@@ -29,17 +29,23 @@
 //! compute dispatch reading 12 texels per pixel (up to 32 where a shifted history is
 //! resampled), and one copy of the view-sized output into the caustics buffer per frame; on a
 //! frame in which a caustic changed, one more dispatch (41 shifts x 64 bilinear reads per tile).
+//!
+//! A technique may ask for a spatial filter over the output
+//! ([`TemporalAccumulation::spatial_passes`], `spatial.wgsl`): à-trous iterations with SVGF's
+//! depth and luminance edge stopping on the output's deviation, the history left unfiltered
+//! (`docs/temporal.md`, "The spatial filter"). It costs [`SPATIAL_BYTES_PER_PIXEL`] and one
+//! view-sized dispatch for its preparation and one per iteration.
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
 
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
-    BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
-    BufferUsages, CachedComputePipelineId, ComputePassDescriptor, ComputePipeline,
-    ComputePipelineDescriptor, Extent3d, PipelineCache, ShaderStages, StorageTextureAccess,
-    TexelCopyTextureInfo, Texture, TextureFormat, TextureSampleType, TextureUsages, TextureView,
-    binding_types,
+    BindGroup, BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer,
+    BufferDescriptor, BufferUsages, CachedComputePipelineId, ComputePassDescriptor,
+    ComputePipeline, ComputePipelineDescriptor, Extent3d, PipelineCache, ShaderStages,
+    StorageTextureAccess, TexelCopyTextureInfo, Texture, TextureFormat, TextureSampleType,
+    TextureUsages, TextureView, binding_types,
 };
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue};
 use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
@@ -67,6 +73,10 @@ pub const CLAMPED_HISTORY: f32 = 0.0;
 /// Bytes per pixel of a view's histories: two each of the prior, the last output and the
 /// depth they belong to.
 pub const TEMPORAL_BYTES_PER_PIXEL: u64 = 2 * (16 + 16 + 4);
+
+/// Bytes per pixel of a view's spatial filter, when it has one: two `Rgba32Float` scratch
+/// outputs.
+pub const SPATIAL_BYTES_PER_PIXEL: u64 = 2 * 16;
 
 /// A pixel whose depth changed by more than this share on a frame in which the scene's
 /// geometry changed shows another surface: its history is dropped (and the photon map
@@ -99,6 +109,32 @@ pub struct TemporalAccumulation {
     /// Frames the technique's estimate of this frame covers (at least 1; 1 for a single
     /// frame, `n` for a mean of the last `n` frames that the technique keeps itself).
     pub frames: u32,
+    /// À-trous iterations of the spatial filter over the output (`spatial.wgsl`), at most
+    /// [`MAX_SPATIAL_PASSES`]; 0: none (the output as accumulated). Each costs one view-sized
+    /// dispatch of 25 taps; with any, the view holds two more `Rgba32Float` textures.
+    pub spatial_passes: u32,
+}
+
+/// The most à-trous iterations of the spatial filter (steps 1, 2, 4 pixels).
+pub const MAX_SPATIAL_PASSES: u32 = 3;
+
+/// The spatial filter's luminance edge stopping, in standard deviations of the output
+/// (SVGF's sigma_l is 4 on a temporal variance; ours is a 3x3 spatial one, which a caustic's
+/// own edges raise).
+pub const SPATIAL_SIGMA_L: f32 = 2.0;
+
+/// The spatial filter's depth edge stopping, in depth gradients (SVGF's sigma_z).
+pub const SPATIAL_SIGMA_Z: f32 = 1.0;
+
+/// Bytes of the spatial filter's parameters per iteration (`SpatialParams` in `spatial.wgsl`).
+const SPATIAL_PARAMS_BYTES: u64 = 32;
+
+/// A view's spatial filter: two scratch outputs in turn, and one parameter buffer for the
+/// preparation and each iteration.
+struct SpatialTargets {
+    /// `Rgba32Float`: the output so far (rgb) and its luminance deviation (a).
+    scratch: [(Texture, TextureView); 2],
+    params: Vec<Buffer>,
 }
 
 /// A view's histories (render world).
@@ -131,14 +167,24 @@ pub struct ViewTemporal {
     k_last: AtomicU32,
     /// The camera's `clip_from_world` of the last frame (the one the history belongs to).
     clip_from_world: Mat4,
+    /// With [`TemporalAccumulation::spatial_passes`] above 0.
+    spatial: Option<SpatialTargets>,
 }
 
 impl ViewTemporal {
     /// GPU bytes held (`render::memory`).
     pub fn gpu_bytes(&self) -> u64 {
-        self.size.x as u64 * self.size.y as u64 * TEMPORAL_BYTES_PER_PIXEL
-            + self.params.size()
-            + self.tile_motion.size()
+        let pixels = self.size.x as u64 * self.size.y as u64;
+        let spatial = self.spatial.as_ref().map_or(0, |s| {
+            pixels * SPATIAL_BYTES_PER_PIXEL + s.params.iter().map(|b| b.size()).sum::<u64>()
+        });
+        pixels * TEMPORAL_BYTES_PER_PIXEL + self.params.size() + self.tile_motion.size() + spatial
+    }
+
+    fn spatial_passes(&self) -> u32 {
+        self.spatial
+            .as_ref()
+            .map_or(0, |s| s.params.len() as u32 - 1)
     }
 }
 
@@ -148,25 +194,35 @@ pub struct TemporalPipelines {
     layout: BindGroupLayoutDescriptor,
     accumulate: CachedComputePipelineId,
     motion: CachedComputePipelineId,
+    spatial_layout: BindGroupLayoutDescriptor,
+    spatial_prep: CachedComputePipelineId,
+    spatial_atrous: CachedComputePipelineId,
 }
 
 #[derive(Resource)]
-struct TemporalShader(Handle<Shader>);
+struct TemporalShader {
+    accumulate: Handle<Shader>,
+    spatial: Handle<Shader>,
+}
 
 /// Register the stage (render app); called from [`crate::render::build`].
 pub(crate) fn build(app: &mut App) {
-    let shader = app
-        .world_mut()
-        .resource_mut::<Assets<Shader>>()
-        .add(Shader::from_wgsl(
+    let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
+    let shader = TemporalShader {
+        accumulate: shaders.add(Shader::from_wgsl(
             include_str!("accumulate.wgsl"),
             "bevy_caustics/temporal_accumulate.wgsl",
-        ));
+        )),
+        spatial: shaders.add(Shader::from_wgsl(
+            [include_str!("../optics.wgsl"), include_str!("spatial.wgsl")].join("\n"),
+            "bevy_caustics/temporal_spatial.wgsl",
+        )),
+    };
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         return;
     };
     render_app
-        .insert_resource(TemporalShader(shader))
+        .insert_resource(shader)
         .add_systems(RenderStartup, init_pipelines)
         .add_systems(
             Render,
@@ -195,20 +251,38 @@ fn init_pipelines(mut commands: Commands, cache: Res<PipelineCache>, shader: Res
             ),
         ),
     );
-    let pipeline = |name: &'static str| {
-        cache.queue_compute_pipeline(ComputePipelineDescriptor {
-            label: Some(format!("caustics:pipeline:temporal_{name}").into()),
-            layout: vec![layout.clone()],
-            shader: shader.0.clone(),
-            entry_point: Some(name.into()),
-            ..default()
-        })
-    };
-    let (accumulate, motion) = (pipeline("accumulate"), pipeline("motion"));
+    let spatial_layout = BindGroupLayoutDescriptor::new(
+        "caustics:bind_group_layout:temporal_spatial",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer_sized(false, None),
+                texture_2d(float),
+                texture_2d(float),
+                texture_2d(float),
+                texture_2d(float),
+                texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+                texture_2d(float),
+            ),
+        ),
+    );
+    let pipeline =
+        |name: &'static str, layout: &BindGroupLayoutDescriptor, shader: &Handle<Shader>| {
+            cache.queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(format!("caustics:pipeline:temporal_{name}").into()),
+                layout: vec![layout.clone()],
+                shader: shader.clone(),
+                entry_point: Some(name.into()),
+                ..default()
+            })
+        };
     commands.insert_resource(TemporalPipelines {
+        accumulate: pipeline("accumulate", &layout, &shader.accumulate),
+        motion: pipeline("motion", &layout, &shader.accumulate),
+        spatial_prep: pipeline("spatial_prep", &spatial_layout, &shader.spatial),
+        spatial_atrous: pipeline("spatial_atrous", &spatial_layout, &shader.spatial),
         layout,
-        accumulate,
-        motion,
+        spatial_layout,
     });
 }
 
@@ -237,8 +311,43 @@ fn depth_history(device: &RenderDevice, size: UVec2) -> (Texture, TextureView) {
     (texture, view)
 }
 
+impl SpatialTargets {
+    fn new(device: &RenderDevice, size: UVec2, passes: u32) -> Self {
+        Self {
+            scratch: [0, 1].map(|_| history_texture(device, "caustics_temporal_spatial", size)),
+            params: (0..=passes)
+                .map(|_| {
+                    device.create_buffer(&BufferDescriptor {
+                        label: Some("caustics_temporal_spatial_params"),
+                        size: SPATIAL_PARAMS_BYTES,
+                        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    })
+                })
+                .collect(),
+        }
+    }
+
+    /// Write the preparation's and each iteration's parameters.
+    fn write_params(&self, queue: &RenderQueue, size: UVec2, k: f32) {
+        let last = self.params.len() - 1;
+        for (i, buffer) in self.params.iter().enumerate() {
+            let step = if i == 0 { 0u32 } else { 1 << (i - 1) };
+            let flags = u32::from(i == last && i > 0);
+            let mut bytes = Vec::with_capacity(SPATIAL_PARAMS_BYTES as usize);
+            for v in [size.x, size.y, step, flags] {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+            for v in [k, SPATIAL_SIGMA_L, SPATIAL_SIGMA_Z, 0.0] {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+            queue.write_buffer(buffer, 0, &bytes);
+        }
+    }
+}
+
 impl ViewTemporal {
-    fn new(device: &RenderDevice, size: UVec2) -> Self {
+    fn new(device: &RenderDevice, size: UVec2, spatial_passes: u32) -> Self {
         let texture = |label| history_texture(device, label, size);
         Self {
             size,
@@ -265,6 +374,8 @@ impl ViewTemporal {
             k: AtomicU32::new(1f32.to_bits()),
             k_last: AtomicU32::new(1f32.to_bits()),
             clip_from_world: Mat4::IDENTITY,
+            spatial: (spatial_passes > 0)
+                .then(|| SpatialTargets::new(device, size, spatial_passes)),
         }
     }
 }
@@ -298,11 +409,13 @@ pub fn prepare_temporal(
             continue;
         };
         let mut fresh = None;
-        let new = !temporal.as_ref().is_some_and(|t| t.size == buffer.size);
+        let passes = request.spatial_passes.min(MAX_SPATIAL_PASSES);
+        let fits = |t: &ViewTemporal| t.size == buffer.size && t.spatial_passes() == passes;
+        let new = !temporal.as_ref().is_some_and(|t| fits(t));
         let temporal = match temporal {
-            Some(t) if t.size == buffer.size => t.into_inner(),
+            Some(t) if fits(&t) => t.into_inner(),
             _ => {
-                fresh = Some(ViewTemporal::new(&device, buffer.size));
+                fresh = Some(ViewTemporal::new(&device, buffer.size, passes));
                 fresh.as_mut().unwrap()
             }
         };
@@ -328,6 +441,9 @@ pub fn prepare_temporal(
         temporal.clip_from_world = now;
         let bytes = params_bytes(buffer.size, flags, k, temporal, request, reprojection);
         queue.write_buffer(&temporal.params, 0, &bytes);
+        if let Some(s) = &temporal.spatial {
+            s.write_params(&queue, buffer.size, k);
+        }
         if let Some(t) = fresh {
             commands.entity(entity).insert(t);
         }
@@ -412,18 +528,32 @@ pub fn ready(
     pipelines: Option<&TemporalPipelines>,
     cache: &PipelineCache,
 ) -> bool {
-    temporal.is_none() || pipelines.is_some_and(|p| p.compiled(cache).is_some())
+    temporal.is_none_or(|t| pipelines.is_some_and(|p| p.compiled(cache, t).is_some()))
+}
+
+/// The stage's compiled pipelines.
+struct Compiled<'a> {
+    accumulate: &'a ComputePipeline,
+    motion: &'a ComputePipeline,
+    /// The spatial filter's preparation and iteration, where the view has one.
+    spatial: Option<[&'a ComputePipeline; 2]>,
 }
 
 impl TemporalPipelines {
-    /// The accumulate and motion pipelines, once both are compiled.
-    fn compiled<'a>(
-        &self,
-        cache: &'a PipelineCache,
-    ) -> Option<(&'a ComputePipeline, &'a ComputePipeline)> {
-        cache
-            .get_compute_pipeline(self.accumulate)
-            .zip(cache.get_compute_pipeline(self.motion))
+    /// Every pipeline the view's stage runs, once all are compiled.
+    fn compiled<'a>(&self, cache: &'a PipelineCache, view: &ViewTemporal) -> Option<Compiled<'a>> {
+        let spatial = match view.spatial {
+            Some(_) => Some([
+                cache.get_compute_pipeline(self.spatial_prep)?,
+                cache.get_compute_pipeline(self.spatial_atrous)?,
+            ]),
+            None => None,
+        };
+        Some(Compiled {
+            accumulate: cache.get_compute_pipeline(self.accumulate)?,
+            motion: cache.get_compute_pipeline(self.motion)?,
+            spatial,
+        })
     }
 }
 
@@ -438,7 +568,7 @@ pub fn accumulate(
     (buffer, depth): (&ViewCausticsBuffer, &TextureView),
     log: &CausticsDispatchLog,
 ) {
-    let Some((pipeline, motion)) = pipelines.compiled(cache) else {
+    let Some(compiled) = pipelines.compiled(cache, temporal) else {
         return;
     };
     if temporal.size != buffer.size {
@@ -462,6 +592,10 @@ pub fn accumulate(
             temporal.tile_motion.as_entire_binding(),
         )),
     );
+    let spatial = temporal
+        .spatial
+        .as_ref()
+        .map(|s| spatial_bind_groups(ctx.render_device(), cache, pipelines, temporal, buffer, s));
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     {
@@ -475,12 +609,20 @@ pub fn accumulate(
         span.settle(&mut pass);
         pass.set_bind_group(0, &group, &[]);
         if temporal.flags.load(Ordering::Relaxed) & FLAG_MOTION != 0 {
-            pass.set_pipeline(motion);
+            pass.set_pipeline(compiled.motion);
             let (x, y) = (buffer.size.x, buffer.size.y);
             pass.dispatch_workgroups(x.div_ceil(MOTION_TILE), y.div_ceil(MOTION_TILE), 1);
         }
-        pass.set_pipeline(pipeline);
-        pass.dispatch_workgroups(buffer.size.x.div_ceil(8), buffer.size.y.div_ceil(8), 1);
+        let groups = (buffer.size.x.div_ceil(8), buffer.size.y.div_ceil(8));
+        pass.set_pipeline(compiled.accumulate);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        if let (Some(bind_groups), Some([prep, atrous])) = (&spatial, compiled.spatial) {
+            for (i, group) in bind_groups.iter().enumerate() {
+                pass.set_pipeline(if i == 0 { prep } else { atrous });
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(groups.0, groups.1, 1);
+            }
+        }
         s.end(&mut pass);
     }
     let texture = |t| TexelCopyTextureInfo {
@@ -489,8 +631,13 @@ pub fn accumulate(
         origin: Default::default(),
         aspect: Default::default(),
     };
+    // The filtered output where the view has a spatial filter (its last iteration's scratch).
+    let shown = match &temporal.spatial {
+        Some(s) => &s.scratch[(s.params.len() - 1) % 2].0,
+        None => &temporal.last[w].0,
+    };
     ctx.command_encoder().copy_texture_to_texture(
-        texture(&temporal.last[w].0),
+        texture(shown),
         texture(&buffer.texture),
         Extent3d {
             width: buffer.size.x,
@@ -509,4 +656,48 @@ pub fn accumulate(
     temporal
         .probation
         .store(probation.saturating_sub(1), Ordering::Relaxed);
+}
+
+/// The spatial filter's bind groups, in dispatch order: the preparation (the stage's output
+/// into scratch 0), then each iteration from one scratch into the other.
+fn spatial_bind_groups(
+    device: &RenderDevice,
+    cache: &PipelineCache,
+    pipelines: &TemporalPipelines,
+    temporal: &ViewTemporal,
+    buffer: &ViewCausticsBuffer,
+    spatial: &SpatialTargets,
+) -> Vec<BindGroup> {
+    let w = 1 - (temporal.read.load(Ordering::Relaxed) & 1);
+    let layout = cache.get_bind_group_layout(&pipelines.spatial_layout);
+    let (output, previous) = (&temporal.last[w].1, &temporal.last[1 - w].1);
+    let (prior, depth) = (&temporal.prior[w].1, &temporal.depth[w].1);
+    let scratch = |i: usize| &spatial.scratch[i % 2].1;
+    spatial
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, params)| {
+            // The preparation reads this frame's output and last frame's; an iteration reads
+            // the last scratch, and the output for the buffer's alpha.
+            let (src, aux) = if i == 0 {
+                (output, previous)
+            } else {
+                (scratch(i - 1), output)
+            };
+            device.create_bind_group(
+                "caustics:bind_group:temporal_spatial",
+                &layout,
+                &BindGroupEntries::sequential((
+                    params.as_entire_binding(),
+                    src,
+                    aux,
+                    prior,
+                    depth,
+                    scratch(i),
+                    &buffer.view,
+                )),
+            )
+        })
+        .collect()
 }
