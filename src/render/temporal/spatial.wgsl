@@ -5,13 +5,15 @@
 // unfiltered: only the caustics buffer shows the filtered output, so the blur never feeds back.
 // Appended to optics.wgsl.
 //
-// `spatial_prep` gives each pixel the standard deviation of the output's luminance from its
-// change since the last frame: a running mean of N frames moves by (x - mean) / N, so
-// N E[Δ²] is σ² / N, the variance of the mean (E[Δ²] over the 3x3 neighbourhood; N = the
-// prior's frames plus the estimate's). A caustic's own shape does not enter it, as a spatial
-// variance's would (measured: the photon map's still error on `glass_sphere` rose from 105.7
-// to 176 lx with the 3x3 spatial deviation); where the history was dropped the output jumped,
-// and the filter smooths the fresh estimate.
+// `spatial_prep` gives each pixel the smaller of two estimates of the standard deviation of
+// the output's luminance (docs/temporal.md, "The spatial filter", has the measurements):
+// - from its change since the last frame: a running mean of N frames moves by (x - mean) / N,
+//   so N E[Δ²] is σ² / N, the variance of the mean (E[Δ²] over the 3x3 neighbourhood; N = the
+//   prior's frames plus the estimate's). A caustic's shape does not enter it; but where the
+//   history was dropped (a caster moved) the output jumped by the caustic's motion too, and
+//   alone it blurred the photon map's moved caustic (sliding ball 145 -> 218 lx);
+// - from this frame's estimate of k frames: its 3x3 luminance variance times k / N. Alone it
+//   holds the caustic's shape and blurred the still focus (105.7 -> 176 lx).
 // `spatial_atrous` is one 5x5 B3 iteration at a step of 1, 2, 4, ... pixels with depth and
 // luminance edge stopping. Its luminance term uses the smaller deviation of the two pixels
 // (image space's symmetric rule, src/render/image_space/svgf.wgsl): a dark, quiet pixel and
