@@ -111,7 +111,8 @@ pub struct TemporalAccumulation {
     pub frames: u32,
     /// À-trous iterations of the spatial filter over the output (`spatial.wgsl`), at most
     /// [`MAX_SPATIAL_PASSES`]; 0: none (the output as accumulated). Each costs one view-sized
-    /// dispatch of 25 taps; with any, the view holds two more `Rgba32Float` textures.
+    /// dispatch of 25 taps; with any, one preparation dispatch more, and the view holds two
+    /// more `Rgba32Float` textures.
     pub spatial_passes: u32,
 }
 
@@ -119,8 +120,8 @@ pub struct TemporalAccumulation {
 pub const MAX_SPATIAL_PASSES: u32 = 3;
 
 /// The spatial filter's luminance edge stopping, in standard deviations of the output
-/// (SVGF's sigma_l is 4 on a temporal variance; ours is a 3x3 spatial one, which a caustic's
-/// own edges raise).
+/// (SVGF's sigma_l is 4). Measured on the photon map's `glass_sphere` (still / sliding ball,
+/// lux): 1 gave 94.0 / 135.5, 2 gave 82.3 / 130.5, 4 gave 75.8 / 145.9 (`docs/temporal.md`).
 pub const SPATIAL_SIGMA_L: f32 = 2.0;
 
 /// The spatial filter's depth edge stopping, in depth gradients (SVGF's sigma_z).
@@ -592,10 +593,16 @@ pub fn accumulate(
             temporal.tile_motion.as_entire_binding(),
         )),
     );
-    let spatial = temporal
-        .spatial
-        .as_ref()
-        .map(|s| spatial_bind_groups(ctx.render_device(), cache, pipelines, temporal, buffer, s));
+    let spatial = temporal.spatial.as_ref().map(|s| {
+        spatial_bind_groups(
+            ctx.render_device(),
+            cache,
+            pipelines,
+            (temporal, w),
+            buffer,
+            s,
+        )
+    });
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     {
@@ -659,16 +666,16 @@ pub fn accumulate(
 }
 
 /// The spatial filter's bind groups, in dispatch order: the preparation (the stage's output
-/// into scratch 0), then each iteration from one scratch into the other.
+/// into scratch 0), then each iteration from one scratch into the other; `w` is the history
+/// index this frame writes.
 fn spatial_bind_groups(
     device: &RenderDevice,
     cache: &PipelineCache,
     pipelines: &TemporalPipelines,
-    temporal: &ViewTemporal,
+    (temporal, w): (&ViewTemporal, usize),
     buffer: &ViewCausticsBuffer,
     spatial: &SpatialTargets,
 ) -> Vec<BindGroup> {
-    let w = 1 - (temporal.read.load(Ordering::Relaxed) & 1);
     let layout = cache.get_bind_group_layout(&pipelines.spatial_layout);
     let (output, previous) = (&temporal.last[w].1, &temporal.last[1 - w].1);
     let (prior, depth) = (&temporal.prior[w].1, &temporal.depth[w].1);
