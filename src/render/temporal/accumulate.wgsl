@@ -113,14 +113,18 @@ fn neighbourhood(p: vec2<i32>) -> vec2<f32> {
     return vec2(mu, sqrt(max(s2 / max(k, 1.0) - mu * mu, 0.0) / max(k, 1.0)));
 }
 
-// The prior's colour clamped to luminance `c` (its own colour where it has one).
+// The prior's colour clamped to luminance `c` (its own colour where it has one). Guard: a
+// colour is scaled by at most MAX_RESCALE, so a luminance near the smallest floats (a dim far
+// pixel) neither overflows the scale nor makes 0 x inf a NaN (seen: image space with three
+// à-trous iterations showed NaN pixels); a darker colour gives way to the next.
+const MAX_RESCALE: f32 = 1.0e30;
 fn with_luminance(prior: vec3<f32>, now: vec3<f32>, c: f32) -> vec3<f32> {
     let hl = lum(prior);
     let l = lum(now);
-    if hl > 0.0 {
+    if hl > 0.0 && c <= hl * MAX_RESCALE {
         return prior * (c / hl);
     }
-    if l > 0.0 {
+    if l > 0.0 && c <= l * MAX_RESCALE {
         return now * (c / l);
     }
     return vec3(c);
