@@ -74,7 +74,10 @@ pub struct ImageSpaceSettings {
     #[reflect(@1_u32..=256_u32)]
     pub history_cap: u32,
     /// À-trous iterations (5×5 kernel, step `2^i`). Default 5 (the SVGF paper: a 65 px
-    /// footprint). Range [0, 8]. Cost: one full-screen pass each.
+    /// footprint). Range [0, 8]. Cost: one full-screen pass each. A pixel whose history holds
+    /// under 4 frames (after a reset: a caster moving every frame resets it every frame) gets
+    /// the first iteration only: its variance is a spatial estimate that holds the caustic's
+    /// own contrast, and the wide ones would spread the caustic.
     #[reflect(@0_u32..=8_u32)]
     pub atrous_iterations: u32,
     /// Depth edge-stopping `σ_z`. Default 1. Range [0.01, 100].
