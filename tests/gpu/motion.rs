@@ -544,39 +544,6 @@ fn a_moving_caster_leaves_no_trail() {
     }
 }
 
-/// The stage's history clamp keeps every pixel finite where a clamped colour is near the
-/// smallest floats: image space with three à-trous iterations on the sliding ball showed one
-/// to four NaN pixels on frames 4 to 17 (a clamped prior of luminance under 1e-20 lux scaled
-/// to the window: 0 x inf) before `with_luminance` bounded its scale (`accumulate.wgsl`).
-#[test]
-fn a_clamped_history_stays_finite() {
-    let _g = GPU.slot();
-    if !require_gpu() {
-        return;
-    }
-    let report = run(RenderJob {
-        scene: scene("glass_sphere"),
-        technique: T::ImageSpace,
-        width: 128,
-        height: 128,
-        photons: Some(1 << 16),
-        frames: 12,
-        every_frame: true,
-        per_frame: Some(slide_ball),
-        image_space: bevy_caustics::ImageSpaceSettings {
-            atrous_iterations: 3,
-            ..Default::default()
-        },
-        ..Default::default()
-    })
-    .expect("render");
-    assert!(report.frame_caustics.len() >= 12);
-    for (i, img) in report.frame_caustics.iter().enumerate() {
-        let bad = img.data.iter().filter(|v| !v.is_finite()).count();
-        assert_eq!(bad, 0, "frame {i}: {bad} non-finite pixels");
-    }
-}
-
 /// The root of the mean squared RMSE of `frames` over [`SLIDE_MEASURED`] against `reference`
 /// of each.
 fn slide_rms<'a>(frames: &[CausticImage], reference: impl Fn(usize) -> &'a CausticImage) -> f64 {

@@ -1,5 +1,6 @@
 //! WGSL twins of the optics core, the BVH traversal and the quadtree walk, each run as a plain
-//! wgpu compute dispatch on lavapipe and compared with the Rust function.
+//! wgpu compute dispatch on lavapipe and compared with the Rust function; and the temporal
+//! stage's clamp rescale against its contract.
 
 use super::{GPU, require_gpu};
 
@@ -788,6 +789,74 @@ fn is_test(@builtin(global_invocation_id) id: vec3<u32>) {
             close(f(e + 7), area),
             "footprint {a:?} {b:?}: {} vs {area}",
             f(e + 7)
+        );
+    }
+}
+
+/// The temporal stage's history clamp rescales a colour to the window's luminance
+/// (`with_luminance` in `src/render/temporal/accumulate.wgsl`): on random colours and on
+/// colours whose luminance lies near the smallest normal floats (with zero channels), the
+/// result is finite, non-negative and of the asked luminance (relative 1e-4). Before the
+/// rescale was bounded, a prior of luminance 2e-38 lux scaled to 100 lux gave inf and 0 x inf
+/// = NaN (seen as NaN pixels with image space at 3 or 4 à-trous iterations).
+#[test]
+fn wgsl_stage_clamp_rescale_stays_finite() {
+    use bevy_caustics::optics::Pcg32;
+    let _g = GPU.slot();
+    if !require_gpu() {
+        return;
+    }
+    // The stage's own bindings are 0 to 9; an entry point's layout holds only what it uses.
+    let kernel = r#"
+@group(0) @binding(10) var<storage, read> rescale_in: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> rescale_out: array<vec4<f32>>;
+@compute @workgroup_size(64)
+fn rescale_test(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&rescale_out) { return; }
+    let a = rescale_in[2u * i];
+    let b = rescale_in[2u * i + 1u];
+    rescale_out[i] = vec4(with_luminance(a.rgb, b.rgb, a.w), 0.0);
+}
+"#;
+    let src = format!(
+        "{}\n{kernel}",
+        include_str!("../../src/render/temporal/accumulate.wgsl")
+    );
+    // (prior rgb, target luminance), (estimate rgb, 0).
+    let mut cases: Vec<[[f32; 4]; 2]> = vec![
+        [[1.0e-37, 0.0, 0.0, 100.0], [0.0; 4]],
+        [[0.0, 0.0, 3.0e-37, 5.0e4], [2.0, 0.0, 0.0, 0.0]],
+        [[1.0e-37, 0.0, 0.0, 100.0], [0.0, 2.0e-37, 0.0, 0.0]],
+        [[0.0; 4], [0.0, 0.0, 1.0e-36, 1.0e3]],
+        [[1.0, 1.0, 1.0, 1.0e-30], [0.0; 4]],
+        [[0.0, 5.0, 0.0, 0.0], [1.0; 4]],
+    ];
+    let mut rng = Pcg32::new(3, 11);
+    for _ in 0..1024 {
+        let mut v = || rng.next_f32() * 1.0e4;
+        cases.push([[v(), v(), v(), v()], [v(), v(), v(), 0.0]]);
+    }
+    let bytes: Vec<u8> = cases
+        .iter()
+        .flatten()
+        .flat_map(|x| x.iter().flat_map(|c| c.to_le_bytes()))
+        .collect();
+    let data = run_compute(&src, "rescale_test", 10, &[bytes], cases.len());
+    let lum = |c: [f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    for (i, case) in cases.iter().enumerate() {
+        let out: [f32; 3] = std::array::from_fn(|k| {
+            f32::from_le_bytes(data[i * 16 + 4 * k..i * 16 + 4 * k + 4].try_into().unwrap())
+        });
+        let want = case[0][3];
+        assert!(
+            out.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "case {i} {case:?}: {out:?}"
+        );
+        assert!(
+            (lum(out) - want).abs() <= 1.0e-4 * want,
+            "case {i} {case:?}: luminance {} for {want}",
+            lum(out)
         );
     }
 }
