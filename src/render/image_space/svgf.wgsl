@@ -6,8 +6,9 @@
 // moments into a variance (a 7x7 bilateral estimate while the history is under
 // SHORT_HISTORY frames); `atrous_prep` + `atrous` are one 5x5 B3 à-trous iteration with
 // depth, normal and luminance edge stopping (optics_svgf_weight) on a 3x3-prefiltered
-// variance, with symmetric weights (see `atrous`), the first iteration only on a short history. Irradiance in lux throughout: no
-// albedo to demodulate, no clamp to [0, 1]. Appended to trace.wgsl (same bindings).
+// variance, with symmetric weights (see `atrous`), the first iteration only on a short
+// history. Irradiance in lux throughout: no albedo to demodulate, no clamp to [0, 1].
+// Appended to trace.wgsl (same bindings).
 
 // History length (frames) under which the variance is estimated spatially and the à-trous
 // filter runs one iteration only (`atrous`).
