@@ -837,12 +837,13 @@ fn rescale_test(@builtin(global_invocation_id) id: vec3<u32>) {
         let mut v = || rng.next_f32() * 1.0e4;
         cases.push([[v(), v(), v(), v()], [v(), v(), v(), 0.0]]);
     }
-    let bytes: Vec<u8> = cases
-        .iter()
-        .flatten()
-        .flat_map(|x| x.iter().flat_map(|c| c.to_le_bytes()))
-        .collect();
-    let data = run_compute(&src, "rescale_test", 10, &[bytes], cases.len());
+    let data = run_compute(
+        &src,
+        "rescale_test",
+        10,
+        &[f4_bytes(&cases.concat())],
+        cases.len(),
+    );
     let lum = |c: [f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
     for (i, case) in cases.iter().enumerate() {
         let out: [f32; 3] = std::array::from_fn(|k| {

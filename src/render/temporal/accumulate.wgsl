@@ -114,9 +114,9 @@ fn neighbourhood(p: vec2<i32>) -> vec2<f32> {
 }
 
 // The prior's colour clamped to luminance `c` (its own colour where it has one). Guard: a
-// colour is scaled by at most MAX_RESCALE, so a luminance near the smallest floats (a dim far
-// pixel) neither overflows the scale nor makes 0 x inf a NaN (seen: image space with three
-// à-trous iterations showed NaN pixels); a darker colour gives way to the next.
+// colour is scaled by at most MAX_RESCALE, so a luminance near the smallest floats neither
+// overflows the scale nor makes 0 x inf a NaN (seen: image space with three à-trous
+// iterations showed NaN pixels); a darker colour gives way to the next.
 const MAX_RESCALE: f32 = 1.0e30;
 fn with_luminance(prior: vec3<f32>, now: vec3<f32>, c: f32) -> vec3<f32> {
     let hl = lum(prior);
