@@ -468,7 +468,7 @@ fn bench_photon_map_table2(c: &mut Criterion) {
                     qs.iter()
                         .map(|q| {
                             heap.clear();
-                            for (a, e) in grid.layout.rows(*q).into_iter().flatten() {
+                            for (a, e) in grid.layout.rows(*q, 1).into_iter().flatten() {
                                 let range = grid.start[a as usize]..grid.start[e as usize];
                                 for i in range {
                                     let d2 = (ph[i as usize].position - *q).length_squared();

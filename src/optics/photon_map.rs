@@ -1,12 +1,14 @@
 //! The hash-grid photon map (seed 001 sections 3.1 and 3.2): the grid's layout, each photon's
-//! cell, the counting sort into `startIdx`, the 9 row ranges of a query, the gather kernel, the
+//! cell, the counting sort into `startIdx`, the row ranges of a query, the gather kernel, the
 //! progressive radius and the photon's packed directions. The GPU build
 //! (src/render/photon_map/grid.wgsl) makes the same choices with the same `f32` operations and
 //! is tested for exact equality against [`build_grid`] (tests/gpu/photon_map.rs).
 //!
 //! Layout (section 3.1): the cell size is the gather radius `r`, the origin is the photons'
-//! minimum less one cell (one layer of padding cells on each side, so a query's 3x3x3
-//! neighbourhood never leaves the grid), and cell `(x, y, z)` is stored at `z·X·Y + y·X + x`.
+//! minimum less one cell (one layer of padding cells on each side, which hold no photon), and
+//! cell `(x, y, z)` is stored at `z·X·Y + y·X + x`. A gather of radius `r` visits the cells
+//! within `⌈r / cell⌉` of its own (the 3x3x3 while the radius is the cell's; a pixel whose
+//! footprint is wider reaches further, [`gather_radius`]).
 //! `start[c]` is the index of cell `c`'s first photon in the sorted photons, `start[cells]`
 //! their count.
 //!
@@ -126,28 +128,34 @@ impl GridLayout {
         (c.z * self.dims.y + c.y) * self.dims.x + c.x
     }
 
-    /// The 9 contiguous cell ranges `[first, last)` (rows of 3 cells along x) of the 3x3x3
-    /// neighbourhood of `p` (seed 001's offset table). The centre cell is clamped to
-    /// `[1, dims − 2]`, which keeps every range inside the grid and still covers every photon
-    /// within one cell of `p` (photons live in cells `0..dims`, and a point outside the grid
-    /// clamps to a neighbourhood that holds every cell it could reach). Empty grid: `None`.
-    pub fn rows(&self, p: Vec3) -> Option<[(u32, u32); 9]> {
+    /// The contiguous cell ranges `[first, last)` (rows along x) of the neighbourhood that
+    /// holds every photon within `reach` cells of `p` (seed 001's offset table is the 3x3x3 of
+    /// `reach` 1): the centre cell, `p`'s cell clamped into the grid, and `reach` cells on each
+    /// side of it, cut at the grid's faces. `(2 reach + 1)²` rows at most. A point outside the
+    /// grid takes the neighbourhood of the cell it clamps to, which holds every cell it could
+    /// reach (the outer layer of cells is padding, without photons). `reach` is clamped to
+    /// `[1, MAX_GATHER_REACH]`. Empty grid or non-finite `p`: `None`.
+    pub fn rows(&self, p: Vec3, reach: u32) -> Option<Vec<(u32, u32)>> {
         if self.dims.min_element() < 3 {
             return None;
         }
-        let hi = (self.dims - UVec3::splat(2)).as_vec3();
+        let hi = (self.dims - UVec3::ONE).as_vec3();
         let f = ((p - self.origin) * self.inv_cell)
             .floor()
-            .clamp(Vec3::ONE, hi);
+            .clamp(Vec3::ZERO, hi);
         if !f.is_finite() {
             return None;
         }
         let c = UVec3::new(f.x as u32, f.y as u32, f.z as u32);
-        let mut out = [(0, 0); 9];
-        for (k, o) in out.iter_mut().enumerate() {
-            let row = UVec3::new(c.x - 1, c.y + (k as u32 % 3) - 1, c.z + (k as u32 / 3) - 1);
-            let first = self.linear(row);
-            *o = (first, first + 3);
+        let m = UVec3::splat(reach.clamp(1, MAX_GATHER_REACH));
+        let lo = c.saturating_sub(m);
+        let top = (c + m).min(self.dims - UVec3::ONE);
+        let mut out = Vec::with_capacity(((top.y - lo.y + 1) * (top.z - lo.z + 1)) as usize);
+        for z in lo.z..=top.z {
+            for y in lo.y..=top.y {
+                let first = self.linear(UVec3::new(lo.x, y, z));
+                out.push((first, first + top.x - lo.x + 1));
+            }
         }
         Some(out)
     }
@@ -238,18 +246,39 @@ pub fn gather_kernel(d2: f32, r2: f32) -> f32 {
     2.0 / (core::f32::consts::PI * r2) * (1.0 - d2 / r2)
 }
 
+/// The most cells a gather reaches from its centre cell along each axis ([`GridLayout::rows`]):
+/// a pixel's footprint may be wider than the progressive radius (the grid's cell), and its
+/// gather then visits `(2 reach + 1)²` rows of cells instead of the 3x3x3. Capped so that a
+/// pixel seeing a surface edge on (whose footprint grows as `1 / cos`) visits at most 81 rows.
+pub const MAX_GATHER_REACH: u32 = 4;
+
+/// The cells a gather of radius `r` reaches from its centre cell, `⌈r / cell⌉` in
+/// `[1, MAX_GATHER_REACH]` (`inv_cell` = `1 / cell`). NaN: 1; infinite: the cap.
+#[inline]
+pub fn gather_reach(r: f32, inv_cell: f32) -> u32 {
+    let m = (r * inv_cell).ceil();
+    if m > 1.0 {
+        (m.min(16.0) as u32).min(MAX_GATHER_REACH)
+    } else {
+        1
+    }
+}
+
 /// The radius a pixel gathers with: the progressive radius `r`, but never less than the radius
 /// of the disc as large as the pixel's footprint on the surface (`footprint_area`,
-/// [`super::pixel_footprint_area`]), and never more than the grid's cell (the 3x3x3 cells hold
-/// only photons within one cell).
+/// [`super::pixel_footprint_area`]), and never more than [`MAX_GATHER_REACH`] cells (the
+/// neighbourhood [`GridLayout::rows`] visits).
 ///
 /// Why the floor: a pixel shows the mean irradiance over its footprint, and that is what the
 /// reference bins. Below the footprint the gather estimates the irradiance at the pixel's
 /// centre instead, which differs wherever the caustic is sharper than a pixel (a caustic
 /// curve's peak), so progressive frames would converge to another image. Measured on `ring`
 /// (the point light's nephroid), RMSE after 64 frames: 125 lx without the floor, falling
-/// below the first frame's with it. Guards: a non-finite or negative area is ignored; the
-/// result is finite, at most `cell`.
+/// below the first frame's with it. The floor reaches past the cell (it was capped at one
+/// cell): at 128² a pixel's footprint is wider than the cell on `mirror_wall`, whose mirrored
+/// rectangle's edges the gather then sampled at the pixel centres; its RMSE stayed at 64 lx
+/// from 2^16 to 2^20 photons (the aliasing, not noise). Guards: a non-finite or negative area
+/// is ignored; the result is finite, at most `MAX_GATHER_REACH · cell`.
 #[inline]
 pub fn gather_radius(r: f32, footprint_area: f32, cell: f32) -> f32 {
     let fp = if footprint_area.is_finite() && footprint_area > 0.0 {
@@ -259,7 +288,7 @@ pub fn gather_radius(r: f32, footprint_area: f32, cell: f32) -> f32 {
     };
     let cell = if cell.is_finite() { cell.max(0.0) } else { 0.0 };
     let r = if r.is_finite() { r.max(0.0) } else { 0.0 };
-    r.max(fp).min(cell)
+    r.max(fp).min(cell * MAX_GATHER_REACH as f32)
 }
 
 /// The squared radius of frame `frame` (1-based) of progressive photon mapping in the
@@ -326,8 +355,8 @@ pub struct Gathered {
     pub used: u32,
 }
 
-/// The gather of seed 001 section 3.2 at point `x` with normal `n`: every photon of the 9 row
-/// ranges within `r` (no k-nearest heap) whose normal has a cosine of at least `cos_min` with
+/// The gather of seed 001 section 3.2 at point `x` with normal `n`: every photon of the row
+/// ranges of `x`'s neighbourhood ([`gather_reach`] cells) within `r` (no k-nearest heap) whose normal has a cosine of at least `cos_min` with
 /// `n` adds `Φ · K(d)` ([`gather_kernel`]). `photons` are in sorted order.
 pub fn gather(
     grid: &PhotonGrid,
@@ -338,7 +367,8 @@ pub fn gather(
     cos_min: f32,
 ) -> Gathered {
     let mut g = Gathered::default();
-    let Some(rows) = grid.layout.rows(x) else {
+    let reach = gather_reach(r, grid.layout.inv_cell);
+    let Some(rows) = grid.layout.rows(x, reach) else {
         return g;
     };
     let r2 = r * r;

@@ -92,14 +92,16 @@ fn grid_layout_fits_and_stays_in_budget() {
     }
     assert!(
         GridLayout::fit(Vec3::ONE, Vec3::ZERO, r, 1.0 / r, 1 << 20)
-            .rows(Vec3::ONE)
+            .rows(Vec3::ONE, 1)
             .is_none()
     );
 }
 
 /// The counting sort against brute force: every photon sits in its own cell's range, `start`
-/// is monotone and ends at the count, and the 9 row ranges of any query (inside, on the
-/// border, far outside) hold every photon within r, the same set a kd-tree (kiddo) finds.
+/// is monotone and ends at the count, and the row ranges of any query (inside, on the border,
+/// far outside) hold every photon within the gather radius, the same set a kd-tree (kiddo)
+/// finds: at the cell's radius (the 3x3x3) and at radii reaching 2, 3 and 4 cells (a pixel
+/// footprint wider than the cell, `gather_reach`).
 #[test]
 fn grid_gather_finds_what_brute_force_and_kiddo_find() {
     use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -133,27 +135,36 @@ fn grid_gather_finds_what_brute_force_and_kiddo_find() {
             Vec3::new(1.3, 0.5, 0.8),
             4,
         );
-        for q in queries
+        let cell = l.cell;
+        for (q, g_r) in queries
             .iter()
             .chain(&[Vec3::splat(100.0), Vec3::splat(-1e4)])
+            .flat_map(|q| [r, 1.5 * cell, 2.5 * cell, 4.0 * cell].map(|g_r| (*q, g_r)))
         {
             let brute = pts
                 .iter()
-                .filter(|p| (**p - *q).length_squared() < r * r)
+                .filter(|p| (**p - q).length_squared() < g_r * g_r)
                 .count();
-            let g = gather(&grid, &sorted, *q, Vec3::Y, r, -1.0);
-            assert_eq!(g.used as usize, brute, "budget {budget}: query {q}");
+            let g = gather(&grid, &sorted, q, Vec3::Y, g_r, -1.0);
+            assert_eq!(
+                g.used as usize, brute,
+                "budget {budget}: query {q} radius {g_r}"
+            );
             let kd = tree
                 .query(&q.to_array())
-                .within::<SquaredEuclidean<f32>>(r * r)
+                .within::<SquaredEuclidean<f32>>(g_r * g_r)
                 .unsorted()
                 .execute()
                 .into_iter()
-                .filter(|h| h.distance < r * r)
+                .filter(|h| h.distance < g_r * g_r)
                 .count();
-            assert_eq!(kd, brute, "kiddo: query {q}");
-            // Visited photons are only the 27 cells': never the whole map (unless tiny).
+            assert_eq!(kd, brute, "kiddo: query {q} radius {g_r}");
             assert!(g.visited as usize >= brute);
+            // Visited photons are only the neighbourhood's: never the whole map (unless tiny).
+            let reach = gather_reach(g_r, l.inv_cell);
+            assert_eq!(reach, (g_r / cell).ceil().max(1.0) as u32);
+            let rows = l.rows(q, reach).expect("a grid");
+            assert!(rows.len() <= ((2 * reach + 1) * (2 * reach + 1)) as usize);
         }
     }
 }
@@ -315,4 +326,42 @@ fn photon_map_settings_are_validated() {
     assert_eq!(s.radius, PhotonMapSettings::default().radius);
     assert_eq!(s.max_grid_cells, MAX_GRID_CELLS);
     assert!(sanitize_photon_map(&mut s, &Default::default()).is_empty());
+}
+
+/// The footprint floor of the gather radius reaches past the cell, up to `MAX_GATHER_REACH`
+/// cells (the neighbourhood a gather visits), and the reach of a radius covers it: a radius
+/// of the cell reaches 1 cell, just over it 2, the cap 4; zero, negative, NaN and infinite
+/// inputs stay finite.
+#[test]
+fn gather_radius_reaches_past_the_cell_to_the_cap() {
+    let cell = 0.02;
+    let inv = 1.0 / cell;
+    let disc = |r: f32| core::f32::consts::PI * r * r;
+    // No footprint: the progressive radius; a footprint as wide as 2.5 cells: that disc.
+    assert_eq!(gather_radius(0.01, 0.0, cell), 0.01);
+    let r = gather_radius(0.01, disc(2.5 * cell), cell);
+    assert!((r - 2.5 * cell).abs() < 1e-6, "{r}");
+    assert_eq!(gather_reach(r, inv), 3);
+    // A footprint seen edge on (huge): capped at MAX_GATHER_REACH cells, reach 4.
+    let cap = cell * MAX_GATHER_REACH as f32;
+    for area in [
+        disc(10.0 * cell),
+        1e30,
+        f32::MAX,
+        f32::INFINITY,
+        f32::NAN,
+        -1.0,
+    ] {
+        let r = gather_radius(0.01, area, cell);
+        assert!(r.is_finite() && r <= cap, "{area}: {r}");
+        assert!(gather_reach(r, inv) <= MAX_GATHER_REACH);
+    }
+    assert_eq!(gather_radius(0.01, 1e30, cell), cap);
+    assert_eq!(gather_reach(cap, inv), MAX_GATHER_REACH);
+    for (r, reach) in [(0.0, 1), (cell, 1), (1.001 * cell, 2), (1e30, 4)] {
+        assert_eq!(gather_reach(r, inv), reach, "{r}");
+    }
+    for (bad, reach) in [(f32::NAN, 1), (-1.0, 1), (f32::INFINITY, MAX_GATHER_REACH)] {
+        assert_eq!(gather_reach(bad, inv), reach, "{bad}");
+    }
 }

@@ -36,23 +36,53 @@ struct GatherResult {
     rejected: u32,
 }
 
-// The centre cell of the 3x3x3 neighbourhood of x (optics::GridLayout::rows); w = 0: empty grid.
+// The centre cell of x's neighbourhood: its cell clamped into the grid (optics::GridLayout::rows);
+// w = 0: empty grid or a non-finite x.
 fn gather_centre(x: vec3<f32>) -> vec4<u32> {
-    let dims = vec3(atomicLoad(&header[H_DIMS]), atomicLoad(&header[H_DIMS + 1u]), atomicLoad(&header[H_DIMS + 2u]));
+    let dims = grid_dims();
     if any(dims < vec3(3u)) {
         return vec4(0u);
     }
     let origin = vec3(bitcast<f32>(atomicLoad(&header[H_ORIGIN])), bitcast<f32>(atomicLoad(&header[H_ORIGIN + 1u])), bitcast<f32>(atomicLoad(&header[H_ORIGIN + 2u])));
     let inv = bitcast<f32>(atomicLoad(&header[H_INV]));
-    let f = clamp(floor((x - origin) * inv), vec3(1.0), vec3<f32>(dims - vec3(2u)));
-    return vec4(vec3<u32>(f), 1u);
+    let f = floor((x - origin) * inv);
+    if !finite3(f) {
+        return vec4(0u);
+    }
+    let c = clamp(f, vec3(0.0), vec3<f32>(dims - vec3(1u)));
+    return vec4(vec3<u32>(c), 1u);
 }
 
-// The first cell of row k (0..9) of the neighbourhood around centre c.
-fn gather_row(c: vec3<u32>, k: u32) -> u32 {
-    let dx = atomicLoad(&header[H_DIMS]);
-    let dy = atomicLoad(&header[H_DIMS + 1u]);
-    return ((c.z + k / 3u - 1u) * dy + (c.y + k % 3u - 1u)) * dx + c.x - 1u;
+fn grid_dims() -> vec3<u32> {
+    return vec3(atomicLoad(&header[H_DIMS]), atomicLoad(&header[H_DIMS + 1u]), atomicLoad(&header[H_DIMS + 2u]));
+}
+
+// The cells within `reach` of centre c, cut at the grid's faces: [lo, hi] per axis.
+struct GatherBox {
+    lo: vec3<u32>,
+    hi: vec3<u32>,
+}
+
+fn gather_box(c: vec3<u32>, reach: u32) -> GatherBox {
+    let m = vec3(clamp(reach, 1u, GATHER_MAX_REACH));
+    var b: GatherBox;
+    b.lo = max(c, m) - m;
+    b.hi = min(c + m, grid_dims() - vec3(1u));
+    return b;
+}
+
+// Row k of box b (rows along x, k over y then z): the cell range [first, last).
+fn gather_row(b: GatherBox, k: u32) -> vec2<u32> {
+    let dims = grid_dims();
+    let ny = b.hi.y - b.lo.y + 1u;
+    let y = b.lo.y + k % ny;
+    let z = b.lo.z + k / ny;
+    let first = (z * dims.y + y) * dims.x + b.lo.x;
+    return vec2(first, first + b.hi.x - b.lo.x + 1u);
+}
+
+fn gather_rows(b: GatherBox) -> u32 {
+    return (b.hi.y - b.lo.y + 1u) * (b.hi.z - b.lo.z + 1u);
 }
 
 fn gather_photon(p: Photon, x: vec3<f32>, n: vec3<f32>, r2: f32, g: ptr<function, GatherResult>) {
@@ -83,7 +113,7 @@ fn pixel_radius(x: vec3<f32>, n: vec3<f32>) -> f32 {
     return gather_radius(r, area, cell);
 }
 
-// optics::gather: every photon of the 9 row ranges within radius r.
+// optics::gather: every photon of the row ranges of x's neighbourhood within radius r.
 fn gather_at(x: vec3<f32>, n: vec3<f32>, r: f32) -> GatherResult {
     var g: GatherResult;
     let c = gather_centre(x);
@@ -91,12 +121,13 @@ fn gather_at(x: vec3<f32>, n: vec3<f32>, r: f32) -> GatherResult {
         return g;
     }
     let r2 = r * r;
-    for (var k = 0u; k < 9u; k += 1u) {
-        let first = gather_row(c.xyz, k);
-        let a = cells[first];
-        let b = cells[first + 3u];
-        g.visited += b - a;
-        for (var i = a; i < b; i += 1u) {
+    let b = gather_box(c.xyz, gather_reach(r, bitcast<f32>(atomicLoad(&header[H_INV]))));
+    for (var k = 0u; k < gather_rows(b); k += 1u) {
+        let row = gather_row(b, k);
+        let a = cells[row.x];
+        let e = cells[row.y];
+        g.visited += e - a;
+        for (var i = a; i < e; i += 1u) {
             gather_photon(sorted[i], x, n, r2, &g);
         }
     }
@@ -255,6 +286,8 @@ var<workgroup> tile_min: atomic<u32>;
 var<workgroup> tile_max: atomic<u32>;
 var<workgroup> tile_key: u32;
 var<workgroup> tile_range: vec2<u32>;
+// PixelInput::key of a pixel whose gather reaches past the 3x3x3 (sorts just under INVALID).
+const WIDE: u32 = 0xfffffffeu;
 
 struct PixelInput {
     p: vec2<i32>,
@@ -263,7 +296,8 @@ struct PixelInput {
     x: vec3<f32>,
     r: f32,
     n: vec3<f32>,
-    // The linear index of the centre cell of its neighbourhood (INVALID: none).
+    // The linear index of the centre cell of its neighbourhood (INVALID: none; WIDE: it
+    // reaches past the 3x3x3, so its tile gathers pixel by pixel).
     key: u32,
 }
 
@@ -286,9 +320,12 @@ fn pixel_input(gid: vec2<u32>) -> PixelInput {
     q.r = pixel_radius(q.x, q.n);
     let c = gather_centre(q.x);
     if c.w != 0u {
-        let dx = atomicLoad(&header[H_DIMS]);
-        let dy = atomicLoad(&header[H_DIMS + 1u]);
-        q.key = (c.z * dy + c.y) * dx + c.x;
+        let dims = grid_dims();
+        q.key = (c.z * dims.y + c.y) * dims.x + c.x;
+        // A footprint wider than the cell reaches further than the tile's shared 3x3x3.
+        if gather_reach(q.r, bitcast<f32>(atomicLoad(&header[H_INV]))) > 1u {
+            q.key = WIDE;
+        }
     }
     return q;
 }
@@ -304,14 +341,14 @@ fn in_view(p: vec2<i32>) -> bool {
 // The cooperative gather of one tile whose pixels share the centre cell `key`.
 fn gather_shared(q: PixelInput, key: u32, lid: u32) -> GatherResult {
     var g: GatherResult;
-    let dx = atomicLoad(&header[H_DIMS]);
-    let dy = atomicLoad(&header[H_DIMS + 1u]);
-    let c = vec3(key % dx, (key / dx) % dy, key / (dx * dy));
+    let dims = grid_dims();
+    let c = vec3(key % dims.x, (key / dims.x) % dims.y, key / (dims.x * dims.y));
     let r2 = q.r * q.r;
-    for (var k = 0u; k < 9u; k += 1u) {
+    let b = gather_box(c, 1u);
+    for (var k = 0u; k < gather_rows(b); k += 1u) {
         if lid == 0u {
-            let first = gather_row(c, k);
-            tile_range = vec2(cells[first], cells[first + 3u]);
+            let row = gather_row(b, k);
+            tile_range = vec2(cells[row.x], cells[row.y]);
         }
         let range = workgroupUniformLoad(&tile_range);
         for (var base = range.x; base < range.y; base += TILE_PHOTONS) {
@@ -364,8 +401,8 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
             let lo = atomicLoad(&tile_min);
             let hi = atomicLoad(&tile_max);
             // One centre cell for the whole tile (and at least one pixel with a surface).
-            tile_key = select(INVALID, lo, lo == hi);
-            if lo == hi && lo != INVALID {
+            tile_key = select(INVALID, lo, lo == hi && lo != WIDE);
+            if lo == hi && lo < WIDE {
                 atomicAdd(&header[C_SHARED_TILES], 1u);
             } else if lo != INVALID {
                 atomicAdd(&header[C_FALLBACK_TILES], 1u);

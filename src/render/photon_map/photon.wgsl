@@ -94,8 +94,11 @@ fn gather_kernel(d2: f32, r2: f32) -> f32 {
     return 2.0 / (3.14159265358979 * r2) * (1.0 - d2 / r2);
 }
 
+// optics::MAX_GATHER_REACH: the most cells a gather reaches from its centre cell per axis.
+const GATHER_MAX_REACH: u32 = 4u;
+
 // optics::gather_radius: the progressive radius, floored at the pixel footprint's disc,
-// capped at the cell.
+// capped at GATHER_MAX_REACH cells.
 fn gather_radius(r_in: f32, footprint_area: f32, cell_in: f32) -> f32 {
     var fp = 0.0;
     if footprint_area > 0.0 && footprint_area <= 3.4e38 {
@@ -103,5 +106,15 @@ fn gather_radius(r_in: f32, footprint_area: f32, cell_in: f32) -> f32 {
     }
     let cell = select(0.0, max(cell_in, 0.0), abs(cell_in) <= 3.4e38);
     let r = select(0.0, max(r_in, 0.0), abs(r_in) <= 3.4e38);
-    return min(max(r, fp), cell);
+    return min(max(r, fp), cell * f32(GATHER_MAX_REACH));
+}
+
+// optics::gather_reach: the cells a gather of radius r reaches, ceil(r / cell) in
+// [1, GATHER_MAX_REACH] (NaN: 1).
+fn gather_reach(r: f32, inv_cell: f32) -> u32 {
+    let m = ceil(r * inv_cell);
+    if m > 1.0 {
+        return min(u32(min(m, 16.0)), GATHER_MAX_REACH);
+    }
+    return 1u;
 }
