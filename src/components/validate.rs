@@ -301,7 +301,8 @@ pub fn sanitize_photon_map(a: &mut PhotonMapSettings, _limits: &CausticsLimits) 
         alpha,
         max_frames,
         normal_threshold,
-        bounce_budget
+        bounce_budget,
+        gather_photons
     );
     *a = fixed;
     fixes

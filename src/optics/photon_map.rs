@@ -291,6 +291,37 @@ pub fn gather_radius(r: f32, footprint_area: f32, cell: f32) -> f32 {
     r.max(fp).min(cell * MAX_GATHER_REACH as f32)
 }
 
+/// The range of [`density_radius`], as multiples of the radius the pixel would have had.
+pub const DENSITY_RADIUS_RANGE: (f32, f32) = (0.25, 2.0);
+
+/// A pixel's gather radius from the photon density its earlier frames found there
+/// ([`crate::PhotonMapSettings::gather_photons`]): the radius of the disc that holds `photons`
+/// photons at `density` (photons per m² per frame, the running mean of the pixel's frames),
+/// `r = sqrt(k / (π ρ))`, kept within [`DENSITY_RADIUS_RANGE`] of `r1` (the radius every pixel
+/// would have had). This is the k-nearest-neighbour radius of Jensen's photon map (the seed's
+/// section 3.2 gathers at a fixed radius instead, with no k-nearest heap), a balloon estimator
+/// of adaptive kernel density estimation (Terrell and Scott 1992): where photons are sparse the
+/// gather widens and its noise falls, in a bright focus it narrows and keeps the focus sharp.
+/// Unlike Jensen's, the density comes from frames before this one, so the radius does not
+/// depend on the photons it gathers and each frame stays a plain kernel estimate at the pixel.
+/// Guards: `photons` zero, negative or NaN: `r1` (off); `r1` zero, negative or not finite:
+/// `r1` as given (the caller's guard: the GPU gathers with it only where it is positive);
+/// density zero, negative or NaN (no photon seen), or so small the radius overflows: the
+/// range's top; an infinite density: the bottom.
+#[inline]
+pub fn density_radius(r1: f32, density: f32, photons: f32) -> f32 {
+    if photons.is_nan() || photons <= 0.0 || !r1.is_finite() || r1 <= 0.0 {
+        return r1;
+    }
+    let (lo, hi) = (r1 * DENSITY_RADIUS_RANGE.0, r1 * DENSITY_RADIUS_RANGE.1);
+    let r = (photons / (core::f32::consts::PI * density)).sqrt();
+    if density > 0.0 && r.is_finite() {
+        r.clamp(lo, hi)
+    } else {
+        hi
+    }
+}
+
 /// The squared radius of frame `frame` (1-based) of progressive photon mapping in the
 /// memoryless form (Knaus and Zwicker 2011, eq. 20): `r_i² = r_{i−1}² (i − 1 + α) / i`, so
 /// `r_i ∝ i^((α−1)/2)` and the mean of the frames converges. `alpha` is clamped to

@@ -434,3 +434,18 @@ fn optics_pixel_footprint_area(distance: f32, cos_alpha: f32, cos_surface: f32, 
     let a = omega * distance * distance / cs;
     return select(3.4028235e38, a, a <= 3.4e38);
 }
+
+// density_radius (src/optics/photon_map.rs): the radius holding `photons` photons at `density`
+// (photons per m² per frame), r = sqrt(k / (π ρ)), within [0.25, 2] x r1
+// (optics::DENSITY_RADIUS_RANGE); photons <= 0 or NaN, or r1 not positive and finite: r1; no
+// density (or a radius that overflows): the range's top.
+fn optics_density_radius(r1: f32, density: f32, photons: f32) -> f32 {
+    if !(photons > 0.0) || !(r1 > 0.0) || !(r1 <= 3.4e38) {
+        return r1;
+    }
+    let r = sqrt(photons / (OPTICS_PI * density));
+    if density > 0.0 && r <= 3.4e38 {
+        return clamp(r, r1 * 0.25, r1 * 2.0);
+    }
+    return r1 * 2.0;
+}

@@ -308,6 +308,7 @@ fn photon_map_settings_are_validated() {
         alpha: 7.0,
         max_frames: 0,
         normal_threshold: -4.0,
+        gather_photons: -1.0,
         ..Default::default()
     };
     let fixes = sanitize_photon_map(&mut s, &Default::default());
@@ -320,10 +321,12 @@ fn photon_map_settings_are_validated() {
             "max_grid_cells",
             "alpha",
             "max_frames",
-            "normal_threshold"
+            "normal_threshold",
+            "gather_photons"
         ]
     );
     assert_eq!(s.radius, PhotonMapSettings::default().radius);
+    assert_eq!(s.gather_photons, 0.0);
     assert_eq!(s.max_grid_cells, MAX_GRID_CELLS);
     assert!(sanitize_photon_map(&mut s, &Default::default()).is_empty());
 }
@@ -364,4 +367,48 @@ fn gather_radius_reaches_past_the_cell_to_the_cap() {
     for (bad, reach) in [(f32::NAN, 1), (-1.0, 1), (f32::INFINITY, MAX_GATHER_REACH)] {
         assert_eq!(gather_reach(bad, inv), reach, "{bad}");
     }
+}
+
+/// The adaptive radius (`density_radius`): the disc at the given density holds the asked
+/// photons (`π r² ρ = k`) inside the range; a density too high or too low for the range gives
+/// its ends; no density (zero, negative, NaN, or one whose radius overflows) gives the top;
+/// no photons asked (0, negative, NaN) or a bad `r1` gives `r1` back.
+#[test]
+fn density_radius_holds_the_asked_photons_within_its_range() {
+    let r1 = 0.02;
+    let (lo, hi) = (r1 * DENSITY_RADIUS_RANGE.0, r1 * DENSITY_RADIUS_RANGE.1);
+    // 64 photons in a disc of radius r1: that density gives r1 back; a quarter of it, 2 r1.
+    let rho = 64.0 / (core::f32::consts::PI * r1 * r1);
+    assert!((density_radius(r1, rho, 64.0) - r1).abs() < 1e-7);
+    assert!((density_radius(r1, rho / 4.0, 64.0) - 2.0 * r1).abs() < 1e-7);
+    let r = density_radius(r1, rho, 16.0);
+    assert!(
+        (core::f32::consts::PI * r * r * rho - 16.0).abs() < 1e-3,
+        "{r}"
+    );
+    // Past the range: its ends.
+    assert_eq!(density_radius(r1, rho * 1e6, 64.0), lo);
+    assert_eq!(density_radius(r1, f32::MAX, 64.0), lo);
+    assert_eq!(density_radius(r1, f32::INFINITY, 64.0), lo);
+    for no_density in [
+        0.0,
+        -1.0,
+        f32::NAN,
+        f32::MIN_POSITIVE,
+        1e-45,
+        f32::NEG_INFINITY,
+    ] {
+        assert_eq!(density_radius(r1, no_density, 64.0), hi, "{no_density}");
+    }
+    for off in [0.0, -3.0, f32::NAN] {
+        assert_eq!(density_radius(r1, rho, off), r1, "photons {off}");
+    }
+    assert_eq!(density_radius(r1, rho, f32::INFINITY), hi);
+    for bad in [0.0, -1.0, f32::INFINITY] {
+        assert_eq!(density_radius(bad, rho, 64.0), bad);
+    }
+    assert!(
+        density_radius(f32::NAN, rho, 64.0).is_nan(),
+        "NaN r1 is returned as given"
+    );
 }

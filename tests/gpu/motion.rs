@@ -37,7 +37,15 @@ fn sphere_frames(
     per_frame: Option<fn(&mut World, u32)>,
     aaps: AapsSettings,
 ) -> Vec<CausticImage> {
-    let report = run(RenderJob {
+    job_frames(RenderJob {
+        aaps,
+        ..sphere_job(technique, frames, per_frame)
+    })
+}
+
+/// The job of [`sphere_frames`], with default settings.
+fn sphere_job(technique: T, frames: usize, per_frame: Option<fn(&mut World, u32)>) -> RenderJob {
+    RenderJob {
         scene: scene("glass_sphere"),
         technique,
         width: 128,
@@ -46,10 +54,14 @@ fn sphere_frames(
         frames: frames as u32,
         every_frame: true,
         per_frame,
-        aaps,
         ..Default::default()
-    })
-    .expect("render");
+    }
+}
+
+/// The caustics of every frame of `job`, each checked finite.
+fn job_frames(job: RenderJob) -> Vec<CausticImage> {
+    let (technique, frames) = (job.technique, job.frames as usize);
+    let report = run(job).expect("render");
     let f = report.frame_caustics;
     assert!(f.len() >= frames, "{} frames", f.len());
     for img in &f {
@@ -79,7 +91,8 @@ fn measure(
 /// the still RMSE with the cube circling (image space was 2.65x when any change reset its SVGF
 /// history; the sun's jitter takes the same path and is run for them with `MOTION_ALL=1`). The photon
 /// map's flicker under motion is at most 1.05x its flicker still: motion adds none (both are
-/// above the issue's 0.01 at frames 17 to 24, where its progressive mean still converges).
+/// above the issue's 0.01 at frames 17 to 24, where its progressive mean still converges),
+/// and with its adaptive radius on it is quieter ([`photon_map_adaptive_radius_is_quieter`]).
 /// Image space's flicker under motion is at most 0.01: with the camera standing its SVGF
 /// history is the plain mean of the unfiltered frames (it was 0.0145 with `alpha_color` 0.2's
 /// steady state).
@@ -136,6 +149,9 @@ fn caustics_hold_up_while_the_scene_moves() {
                 assert!(m.1 <= 0.01, "image space, {what}: flicker {}", m.1);
             }
         }
+        if technique == T::PhotonMap {
+            photon_map_adaptive_radius_is_quieter(cube, &reference);
+        }
         if technique != T::Aaps {
             continue;
         }
@@ -160,6 +176,40 @@ fn caustics_hold_up_while_the_scene_moves() {
             assert!(m.1 <= 0.01, "{what}: flicker {}", m.1);
         }
     }
+}
+
+/// The photon map's adaptive radius (`PhotonMapSettings::gather_photons`, off by default) at
+/// 64 photons per gather, with the cube circling (frames 17 to 24 against the converged
+/// reference), against the fixed radius's run of [`caustics_hold_up_while_the_scene_moves`]
+/// (`fixed`: RMSE, flicker): its RMSE is lower (measured 63.3 against 76.0 lx), its flicker
+/// at most 0.7x (0.0099 against 0.0158: under issue 28's 0.01, which the default misses), and
+/// its energy within 1 % of the reference's at every measured frame (within 0.04 % measured; a
+/// radius that varies per pixel does not keep the energy exact). Every frame is finite.
+fn photon_map_adaptive_radius_is_quieter(fixed: (f64, f64), reference: &CausticImage) {
+    use bevy_caustics::PhotonMapSettings;
+    let adaptive = job_frames(RenderJob {
+        photon_map: PhotonMapSettings {
+            gather_photons: 64.0,
+            ..Default::default()
+        },
+        ..sphere_job(T::PhotonMap, MEASURED.end, Some(circle_cube))
+    });
+    let rmse = mean_rmse(&adaptive, |_| reference);
+    let flicker = mean_flicker(&adaptive);
+    let energy: Vec<f64> = MEASURED
+        .map(|i| {
+            compare(&adaptive[i], reference, None)
+                .expect("size")
+                .energy_error
+        })
+        .collect();
+    println!(
+        "PhotonMap, gather_photons 64, circling cube: RMSE {rmse:.1} lx (fixed radius {:.1}), flicker {flicker:.4} ({:.4}), energy error {energy:+.4?}",
+        fixed.0, fixed.1
+    );
+    assert!(rmse < fixed.0, "{rmse} vs {fixed:?}");
+    assert!(flicker <= 0.7 * fixed.1, "flicker {flicker} vs {fixed:?}");
+    assert!(energy.iter().all(|e| e.abs() <= 0.01), "{energy:?}");
 }
 
 /// The sun's illuminance at frame 0, kept to scale it by per frame.

@@ -130,7 +130,8 @@ fn stiff_cases_image_space() {
 }
 
 /// The photon map on every case: odd cases with a grid far too small for the photons' bounds
-/// (4096 cells at r = 1e-4 of the casters' radius: the cells must double, counted); the
+/// (4096 cells at r = 1e-4 of the casters' radius: the cells must double, counted) and the
+/// adaptive radius on (`gather_photons` 64); the
 /// million-photon case traces 2^22 photons (the most 32-byte photons one 128 MiB binding
 /// holds) and stores about a million with a radius as large as the ball, so its focus falls
 /// into a handful of cells.
@@ -152,9 +153,11 @@ fn stiff_cases_photon_map() {
                 ..Default::default()
             }
         } else if w.i % 2 == 1 {
+            // With the adaptive radius, too (frames 2 to 4 size each pixel by its density).
             PhotonMapSettings {
                 radius: 1e-4,
                 max_grid_cells: 4096,
+                gather_photons: 64.0,
                 ..Default::default()
             }
         } else {

@@ -9,7 +9,8 @@
 @group(0) @binding(13) var<storage, read> cells: array<u32>;
 // Per pixel: rgb the mean irradiance (lux) over the accumulated frames, w the distance from
 // the eye to the pixel's point, negative where the pixel shows a mirror; then, from
-// `pixel_count()` on, per pixel x the frames in its mean.
+// `pixel_count()` on, per pixel x the frames in its mean and y the mean photon density its
+// gathers found over them (photons per m² per frame; pixel_radius).
 @group(0) @binding(14) var<storage, read_write> accum: array<vec4<f32>>;
 @group(0) @binding(15) var view_depth: texture_depth_2d;
 @group(0) @binding(16) var gbuffer: texture_2d<u32>;
@@ -98,9 +99,19 @@ fn gather_photon(p: Photon, x: vec3<f32>, n: vec3<f32>, r2: f32, g: ptr<function
     }
 }
 
-// The radius at point x seen from the eye (optics::gather_radius with the pixel footprint).
-fn pixel_radius(x: vec3<f32>, n: vec3<f32>) -> f32 {
-    let r = sqrt(params.view.z);
+// The radius of pixel idx at point x seen from the eye: this frame's progressive radius, scaled
+// with FLAG_DENSITY from the first frame's (lens.w) to the pixel's own (optics::density_radius
+// of the photon density its earlier frames found, accum's y, for forward.w photons:
+// PhotonMapSettings::gather_photons), then optics::gather_radius with the pixel footprint.
+fn pixel_radius(x: vec3<f32>, n: vec3<f32>, idx: u32) -> f32 {
+    var r = sqrt(params.view.z);
+    let r1 = params.lens.w;
+    if (params.frame.w & FLAG_DENSITY) != 0u && params.forward.w > 0.0 && r1 > 0.0 {
+        let c = accum[pixel_count() + idx];
+        if c.x >= 1.0 {
+            r *= optics_density_radius(r1, c.y, params.forward.w) / r1;
+        }
+    }
     let cell = bitcast<f32>(atomicLoad(&header[H_CELL]));
     var area = 0.0;
     if params.lens.z != 0.0 {
@@ -146,11 +157,15 @@ fn count_gather(g: GatherResult) {
 // Blend this frame's irradiance into the pixel's running mean and write the caustics buffer.
 // `mirror`: the value is a mirror pixel's `F · albedo · E` (its own albedo is already in it),
 // marked by alpha -1 for the composite (src/render/composite/composite.wgsl).
-fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32, mirror: bool) {
+// `density_in`: the photons per m² this frame's gather found (their running mean sizes the
+// pixel's later gathers with FLAG_DENSITY, pixel_radius).
+fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32, mirror: bool, density_in: f32) {
     let idx = u32(p.y) * u32(params.view.x) + u32(p.x);
     let count_at = pixel_count() + idx;
     let e = select(vec3(0.0), e_in, finite3(e_in));
+    let density = select(0.0, density_in, density_in >= 0.0 && density_in <= 3.4e38);
     var mean = e;
+    var density_mean = density;
     var n = 1.0;
     if (params.frame.w & FLAG_ACCUMULATE) != 0u {
         let prev = accum[idx];
@@ -159,13 +174,15 @@ fn resolve_pixel(p: vec2<i32>, e_in: vec3<f32>, dist: f32, mirror: bool) {
         let moved = (params.frame.w & FLAG_VALIDATE) != 0u
             && (abs(abs(prev.w) - dist) > params.gather.w * dist || (prev.w < 0.0) != mirror);
         if !moved {
-            n = accum[count_at].x + 1.0;
+            let c = accum[count_at];
+            n = c.x + 1.0;
             mean = prev.xyz + (e - prev.xyz) / n;
+            density_mean = c.y + (density - c.y) / n;
         }
     }
     // w: the eye distance, negative on a mirror pixel (kept for the frozen mean).
     accum[idx] = vec4(mean, select(dist, -dist, mirror));
-    accum[count_at] = vec4(n, 0.0, 0.0, 0.0);
+    accum[count_at] = vec4(n, density_mean, 0.0, 0.0);
     textureStore(out_caustics, p, vec4(mean, select(1.0, -1.0, mirror)));
 }
 
@@ -269,12 +286,13 @@ fn resolve_gathered(q: PixelInput, g: GatherResult) {
     if (params.frame.w & FLAG_MIRRORS) != 0u {
         let m = mirror_term(q.x);
         if m.w != 0.0 {
-            resolve_pixel(q.p, m.xyz, distance(q.x, params.eye.xyz), true);
+            resolve_pixel(q.p, m.xyz, distance(q.x, params.eye.xyz), true, 0.0);
             return;
         }
     }
     count_gather(g);
-    resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz), false);
+    let density = f32(g.used) / max(OPTICS_PI * q.r * q.r, 1e-30);
+    resolve_pixel(q.p, g.e, distance(q.x, params.eye.xyz), false, density);
 }
 
 // Algorithm 1 of the seed, generalised to an 8x8 tile: when every pixel of the tile that has a
@@ -317,7 +335,7 @@ fn pixel_input(gid: vec2<u32>) -> PixelInput {
     q.ok = true;
     q.x = x.xyz;
     q.n = n.xyz;
-    q.r = pixel_radius(q.x, q.n);
+    q.r = pixel_radius(q.x, q.n, u32(q.p.y) * u32(size.x) + u32(q.p.x));
     let c = gather_centre(q.x);
     if c.w != 0u {
         let dims = grid_dims();
@@ -414,7 +432,7 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
             if q.ok {
                 resolve_gathered(q, g);
             } else if in_view(q.p) {
-                resolve_pixel(q.p, vec3(0.0), 0.0, false);
+                resolve_pixel(q.p, vec3(0.0), 0.0, false, 0.0);
             }
             return;
         }
@@ -423,7 +441,7 @@ fn pm_gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoc
         return;
     }
     if !q.ok {
-        resolve_pixel(q.p, vec3(0.0), 0.0, false);
+        resolve_pixel(q.p, vec3(0.0), 0.0, false, 0.0);
         return;
     }
     if (params.frame.w & FLAG_REUSE) != 0u {

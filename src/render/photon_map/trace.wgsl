@@ -22,8 +22,8 @@ struct PmParams {
     emit: vec4<u32>,     // photons per light, lights, max bounces, capacity
     frame: vec4<u32>,    // R2 rotation x, y, frame seed, flags (FLAG_*)
     gather: vec4<f32>,   // weight of this frame in the mean (1 / i), the frame i, specular-event budget of the frame, surface tolerance (FLAG_VALIDATE)
-    lens: vec4<f32>,     // focal lengths fx, fy (px); z 1 for a perspective camera (footprint floor)
-    forward: vec4<f32>,  // the camera's forward axis (xyz)
+    lens: vec4<f32>,     // focal lengths fx, fy (px); z 1 for a perspective camera (footprint floor); w the first frame's radius (m)
+    forward: vec4<f32>,  // the camera's forward axis (xyz), w photons a pixel's gather aims at with FLAG_DENSITY
     other_eye: vec4<f32>, // the left eye's position (xyz), for a right eye that reuses
 }
 
@@ -33,6 +33,7 @@ const FLAG_SHARED: u32 = 4u;     // workgroup-shared cooperative gather (algorit
 const FLAG_MIRRORS: u32 = 8u;    // pixels on mirrors gather at their reflected point
 const FLAG_REUSE: u32 = 16u;     // this view is a right eye: reuse the left eye's gathers
 const FLAG_VALIDATE: u32 = 32u;  // a receiver moved: restart pixels whose eye distance changed
+const FLAG_DENSITY: u32 = 64u;   // accum holds the photon density of this view's last frame
 
 @group(0) @binding(9) var<uniform> params: PmParams;
 @group(0) @binding(10) var<storage, read_write> photons: array<Photon>;

@@ -43,6 +43,7 @@ const FLAG_SHARED: u32 = 4;
 const FLAG_MIRRORS: u32 = 8;
 const FLAG_REUSE: u32 = 16;
 const FLAG_VALIDATE: u32 = 32;
+const FLAG_DENSITY: u32 = 64;
 
 /// What decides the buffers' sizes; a change reallocates them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -112,7 +113,8 @@ pub struct PhotonMapViewState {
     /// Each photon's cell, from the count pass.
     pub photon_cell: Buffer,
     /// Per pixel: the running mean (rgb) and the eye distance (w); then per pixel the frames
-    /// in its mean (x).
+    /// in its mean (x) and the mean photon density its gathers found, photons per m² per frame
+    /// (y; [`PhotonMapSettings::gather_photons`]).
     pub accum: Buffer,
     /// The scene's receiver generation of the last frame that ran.
     receivers: u64,
@@ -298,6 +300,7 @@ pub fn prepare_photon_map_views(
             budget: settings.max_grid_cells,
         };
         let mut fresh = None;
+        let reused = matches!(&state, Some(s) if s.key == key);
         let state = match state {
             Some(s) if s.key == key => s.into_inner(),
             _ => {
@@ -317,6 +320,15 @@ pub fn prepare_photon_map_views(
             per_light,
             radius: r0.to_bits(),
         };
+        // The per-pixel photon density in `accum` is of this view's last frame: it sizes this
+        // frame's gathers (`PhotonMapSettings::gather_photons`) through a change of the scene,
+        // not through a change of the camera or the settings.
+        let density_ok = reused
+            && state.accumulating.as_ref().is_some_and(|a| {
+                a.clip_from_world == now.clip_from_world
+                    && a.settings == now.settings
+                    && a.per_light == now.per_light
+            });
         if state.accumulating.as_ref() != Some(&now) {
             state.frame = 0;
             state.frozen_shown = false;
@@ -387,6 +399,7 @@ pub fn prepare_photon_map_views(
             (settings.mirrors && scene.has_mirrors, FLAG_MIRRORS),
             (reuse, FLAG_REUSE),
             (receivers_moved, FLAG_VALIDATE),
+            (density_ok && settings.gather_photons > 0.0, FLAG_DENSITY),
         ] {
             if on {
                 flags |= flag;
@@ -497,11 +510,11 @@ fn write_uniforms(
             0.5 * size.x * p.x_axis.x,
             0.5 * size.y * p.y_axis.y,
             if perspective { 1.0 } else { 0.0 },
-            0.0,
+            r0,
         ],
     );
     let forward = view.world_from_view.forward();
-    f32s(&mut b, &[forward.x, forward.y, forward.z, 0.0]);
+    f32s(&mut b, &[forward.x, forward.y, forward.z, s.gather_photons]);
     f32s(&mut b, &[other_eye.x, other_eye.y, other_eye.z, 0.0]);
     debug_assert_eq!(b.len() as u64, PARAMS_BYTES);
     queue.write_buffer(&state.params, 0, &b);
