@@ -89,6 +89,17 @@ struct Accumulating {
     radius: u32,
 }
 
+impl Accumulating {
+    /// Whether the per-pixel photon density a mean of `self` left in `accum` sizes the gathers
+    /// of `now` (`PhotonMapSettings::gather_photons`): through a change of the scene, not of
+    /// the camera, the settings or the photon count.
+    fn keeps_density(&self, now: &Self) -> bool {
+        self.clip_from_world == now.clip_from_world
+            && self.settings == now.settings
+            && self.per_light == now.per_light
+    }
+}
+
 /// The photon map of one view (render world).
 #[derive(Component)]
 pub struct PhotonMapViewState {
@@ -320,15 +331,11 @@ pub fn prepare_photon_map_views(
             per_light,
             radius: r0.to_bits(),
         };
-        // The per-pixel photon density in `accum` is of this view's last frame: it sizes this
-        // frame's gathers (`PhotonMapSettings::gather_photons`) through a change of the scene,
-        // not through a change of the camera or the settings.
         let density_ok = reused
-            && state.accumulating.as_ref().is_some_and(|a| {
-                a.clip_from_world == now.clip_from_world
-                    && a.settings == now.settings
-                    && a.per_light == now.per_light
-            });
+            && state
+                .accumulating
+                .as_ref()
+                .is_some_and(|a| a.keeps_density(&now));
         if state.accumulating.as_ref() != Some(&now) {
             state.frame = 0;
             state.frozen_shown = false;
