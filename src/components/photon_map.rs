@@ -96,7 +96,7 @@ pub struct PhotonMapSettings {
     /// noise and hurts where it is the blur of a sharp caustic curve. Measured at 64 (report
     /// sweep, 8 frames, 2^16 photons per light): RMSE on `mirror_wall` -35 %, `glass_slab`
     /// -13 %, `glass_sphere` -23 %, `pool` -11 %, but `ring` (a point light's nephroid) +33 %
-    /// with its FLIP 0.040 -> 0.052; on `glass_sphere` at frames 17 to 24 (128², 2^16) RMSE
+    /// with its FLIP 0.040 -> 0.053; on `glass_sphere` at frames 17 to 24 (128², 2^16) RMSE
     /// 76.0 -> 63.3 lx, flicker 0.0158 -> 0.0099, a sliding ball 130.5 -> 108.6 lx (see
     /// `docs/photon-map.md`). Range [0, 4096]. Cost: none to the gather (one more float per
     /// pixel read and written; the per-pixel buffer already held it).
