@@ -152,6 +152,14 @@ pub struct PhotonMapViewState {
 }
 
 impl PhotonMapViewState {
+    /// Whether the density its last mean left in `accum` sizes the gathers of `now`
+    /// ([`Accumulating::keeps_density`]).
+    fn keeps_density(&self, now: &Accumulating) -> bool {
+        self.accumulating
+            .as_ref()
+            .is_some_and(|a| a.keeps_density(now))
+    }
+
     /// GPU bytes held (`render::memory`).
     pub fn gpu_bytes(&self) -> u64 {
         crate::render::memory::buffer_bytes([
@@ -331,11 +339,7 @@ pub fn prepare_photon_map_views(
             per_light,
             radius: r0.to_bits(),
         };
-        let density_ok = reused
-            && state
-                .accumulating
-                .as_ref()
-                .is_some_and(|a| a.keeps_density(&now));
+        let density_ok = reused && state.keeps_density(&now);
         if state.accumulating.as_ref() != Some(&now) {
             state.frame = 0;
             state.frozen_shown = false;
