@@ -16,7 +16,10 @@ use bevy::camera::primitives::Aabb;
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use bevy_caustics::CausticsInspectorPlugin;
-use bevy_caustics::headless::{LoaderPanicCapture, load_failure_reason, report_load_failures_of};
+use bevy_caustics::headless::{
+    LoaderPanicCapture, StageLayout, StagePart, build_stage, load_failure_reason,
+    report_load_failures_of,
+};
 use bevy_caustics::mark_every_light;
 use bevy_caustics::prelude::*;
 use clap::Parser;
@@ -76,7 +79,16 @@ fn main() -> AppExit {
         .add_plugins(Controls::new("the scene's lights cast caustics"))
         .insert_resource(ScenePath { given, name })
         .add_systems(Startup, load)
-        .add_systems(Update, (refused, mark_every_light, caustics_camera))
+        .add_systems(
+            Update,
+            (
+                refused,
+                stage_unlit_model,
+                mark_every_light,
+                caustics_camera,
+            )
+                .chain(),
+        )
         .run()
 }
 
@@ -131,6 +143,41 @@ fn refused(
     }
 }
 
+/// A model that brings no light (most sample models: no light, camera or floor) goes on the
+/// headless renderer's stage, as `render --stage` puts it: a 10 000 lux sun and a floor below
+/// it, said once on stdout. Waits, as the camera does, until the scene has spawned.
+#[allow(clippy::type_complexity)]
+fn stage_unlit_model(
+    mut commands: Commands,
+    lights: Query<(), Or<(With<DirectionalLight>, With<PointLight>, With<SpotLight>)>>,
+    meshes: Query<(&Mesh3d, &GlobalTransform), Without<StagePart>>,
+    (mut mesh_assets, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
+    path: Res<ScenePath>,
+    mut frames: Local<u32>,
+) {
+    if *frames >= 3 || meshes.is_empty() {
+        return;
+    }
+    *frames += 1;
+    if *frames < 3 || !lights.is_empty() {
+        return;
+    }
+    if build_stage(
+        &mut commands,
+        &meshes,
+        &mut mesh_assets,
+        &mut materials,
+        16.0 / 9.0,
+    )
+    .is_ok()
+    {
+        println!(
+            "{} has no lights: it stands on a stage (a 10 000 lux sun and a floor)",
+            path.given.display()
+        );
+    }
+}
+
 /// The glTF's camera gets caustics and the orbit controls; without one, a camera is added
 /// looking at the meshes' bounds. Both wait until the scene has been spawned for a few frames,
 /// so transforms have propagated and the meshes have their bounds.
@@ -140,6 +187,7 @@ fn caustics_camera(
     cameras: Query<(Entity, &GlobalTransform), (With<Camera3d>, Without<Caustics>)>,
     with_caustics: Query<(), With<Caustics>>,
     meshes: Query<(&GlobalTransform, &Aabb), With<Mesh3d>>,
+    stage: Option<Res<StageLayout>>,
     mut frames: Local<u32>,
 ) {
     if !with_caustics.is_empty() || meshes.is_empty() {
@@ -167,6 +215,13 @@ fn caustics_camera(
         commands
             .entity(e)
             .insert((components, OrbitCamera::looking_at(eye, focus)));
+    } else if let Some(stage) = stage {
+        let focus = (stage.bounds.0 + stage.bounds.1) * 0.5;
+        commands.spawn((
+            Camera3d::default(),
+            components,
+            OrbitCamera::looking_at(stage.camera.translation, focus),
+        ));
     } else if *frames > 30 && lo.x <= hi.x {
         let size = (hi - lo).length().max(0.1);
         commands.spawn((

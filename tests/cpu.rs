@@ -824,6 +824,8 @@ mod image_space;
 mod inspector;
 #[path = "cpu/limits.rs"]
 mod limits;
+#[path = "cpu/load_error.rs"]
+mod load_error;
 #[path = "cpu/metrics.rs"]
 mod metrics;
 #[path = "cpu/photon_map.rs"]

@@ -406,7 +406,7 @@ pub(super) fn drive(
             let Ok((status, _, progress)) = main.single() else {
                 return;
             };
-            if job.0.technique == CausticsTechnique::Volume && !fitted.0 {
+            if job.0.technique == CausticsTechnique::Volume && !fitted.done {
                 return;
             }
             if job.0.technique != CausticsTechnique::Reference {

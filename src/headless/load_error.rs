@@ -130,11 +130,50 @@ pub fn load_failure_reason(err: &AssetLoadError) -> String {
     };
     // The first line: a nested `BevyError` (a texture the glTF loader waited for) carries its
     // backtrace after a newline too.
-    text.lines()
+    let line = text
+        .lines()
         .map(str::trim)
         .find(|l| !l.is_empty())
-        .unwrap_or("unknown error")
-        .to_string()
+        .unwrap_or("unknown error");
+    unsupported_extensions(line).unwrap_or_else(|| line.to_string())
+}
+
+/// A refusal for required extensions the loader does not read (the parser's text, as in
+/// `load_failure_reason`), told by name with what to do instead of the parser's "Missing data"
+/// for every accessor or texture they hold; `None` where the reason is another.
+pub fn unsupported_extensions(reason: &str) -> Option<String> {
+    // The `gltf` crate's text: `extensionsRequired[0] = "KHR_draco_mesh_compression":
+    // Unsupported extension`, among the other validation errors, `;`-separated.
+    let names: Vec<&str> = reason
+        .split(';')
+        .filter_map(|e| e.find("extensionsRequired[").map(|at| e[at..].trim()))
+        .filter(|e| e.ends_with("Unsupported extension"))
+        .filter_map(|e| e.split('"').nth(1))
+        .collect();
+    if names.is_empty() {
+        return None;
+    }
+    let hints: Vec<&str> = names
+        .iter()
+        .filter_map(|n| match *n {
+            "KHR_draco_mesh_compression" | "EXT_meshopt_compression" => Some(
+                "decode the compressed geometry first (`npx @gltf-transform/cli copy in.glb out.glb`)",
+            ),
+            "EXT_texture_webp" => Some(
+                "convert the WebP textures to PNG (`npx @gltf-transform/cli png in.glb out.glb --formats '*'`)",
+            ),
+            _ => None,
+        })
+        .collect();
+    let mut text = format!(
+        "it requires glTF extension{} {} that Bevy's glTF loader does not read",
+        if names.len() > 1 { "s" } else { "" },
+        names.join(", ")
+    );
+    if !hints.is_empty() {
+        write!(text, ": {}", hints.join("; ")).ok();
+    }
+    Some(text)
 }
 
 /// The layer behind [`quiet_reported_load_failures`]: an event it refuses is refused for the

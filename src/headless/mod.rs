@@ -24,11 +24,11 @@ pub use counters::*;
 pub use job::*;
 pub use load_error::{
     LoaderPanicCapture, load_failure_reason, quiet_reported_load_failures, report_load_failures_of,
-    tool_log_plugin,
+    tool_log_plugin, unsupported_extensions,
 };
 pub use report::RenderReport;
 pub use stage::{
     STAGE_EV100, STAGE_FLOOR_ALBEDO, STAGE_FOV_Y, STAGE_SUN_LUX, StageLayout, StagePart,
-    stage_sun_direction, world_bounds,
+    build_stage, stage_sun_direction, world_bounds,
 };
 pub use volume::VolumeCounters;

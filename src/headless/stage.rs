@@ -118,8 +118,9 @@ pub struct StagePart;
 
 /// Measure the spawned model and add the stage: a sun ([`STAGE_SUN_LUX`], shadows on), the
 /// floor and the [`StageLayout`] resource the job's camera takes its view from. Returns an
-/// error line when the model has no mesh to frame.
-pub(crate) fn build_stage(
+/// error line when the model has no mesh to frame. The glTF viewer stages a model that brings
+/// no light of its own the same way.
+pub fn build_stage(
     commands: &mut Commands,
     meshes: &Query<(&Mesh3d, &GlobalTransform), Without<StagePart>>,
     mesh_assets: &mut Assets<Mesh>,

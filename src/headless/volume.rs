@@ -7,9 +7,16 @@ use serde::Serialize;
 use crate::components::CausticsVolume;
 use crate::scene::{CausticsScene, TraceLight};
 
-/// Volumes are in place (declared, fitted, or there was nothing to fit).
+/// Where the fitting stands.
 #[derive(Resource, Default)]
-pub(crate) struct VolumesFitted(pub bool);
+pub(crate) struct VolumesFitted {
+    /// Volumes are in place (declared, fitted, or there was nothing to fit).
+    pub done: bool,
+    /// The scene declared volumes of its own: none is fitted.
+    declared: bool,
+    /// The lights a volume was fitted for (or that were told none fits).
+    lights: Vec<Entity>,
+}
 
 /// The settings a fitted volume takes from the job (everything but its box and faces).
 pub(crate) fn apply_template(v: &mut CausticsVolume, t: &CausticsVolume) {
@@ -48,10 +55,12 @@ fn fit_for(bounds: (Vec3, Vec3), light: &TraceLight) -> Option<(CausticsVolume, 
 }
 
 /// Fit one volume per caustic light around the casters (their world box), entry face towards
-/// the light, once the scene is gathered, unless a volume exists already. A fitted volume
-/// follows its casters: when their bounds change (a caster moved), it is fitted again, as a
-/// game would parent a volume to a moving caster or size it for the caster's path (a volume
-/// left behind lights only the part of the caster still inside it).
+/// the light, once the scene is gathered, unless the scene declares volumes of its own. A light
+/// that joins the scene later (a stage's sun gathered a frame after a model's own lights) gets
+/// its volume then. A fitted volume follows its casters: when their bounds change (a caster
+/// moved), it is fitted again, as a game would parent a volume to a moving caster or size it
+/// for the caster's path (a volume left behind lights only the part of the caster still inside
+/// it).
 pub(crate) fn fit_volumes(
     mut commands: Commands,
     template: Res<VolumeTemplate>,
@@ -61,18 +70,13 @@ pub(crate) fn fit_volumes(
     mut fitted: ResMut<VolumesFitted>,
     mut followers: Query<(&mut CausticsVolume, &mut Transform, &mut FittedVolume)>,
 ) {
-    if fitted.0 {
-        if let Some(scene) = scene.filter(|s| s.is_changed()) {
-            refit(&scene, &mut followers);
-        }
-        return;
-    }
     // After the camera and the job's hook (which may declare volumes) are in.
-    if !template.0 || cameras.is_empty() {
+    if fitted.declared || !template.0 || cameras.is_empty() {
         return;
     }
-    if !existing.is_empty() {
-        fitted.0 = true;
+    if !fitted.done && !existing.is_empty() {
+        fitted.declared = true;
+        fitted.done = true;
         return;
     }
     let Some(scene) = scene else {
@@ -83,10 +87,17 @@ pub(crate) fn fit_volumes(
     }
     let Some(bounds) = scene.tlas.bounds_where(|i| i.surface.is_specular()) else {
         // No caster: nothing to fit, nothing to run.
-        fitted.0 = true;
+        fitted.done = true;
         return;
     };
+    if fitted.done && scene.is_changed() {
+        refit(&scene, &mut followers);
+    }
     for (entity, light) in &scene.lights {
+        if fitted.lights.contains(entity) {
+            continue;
+        }
+        fitted.lights.push(*entity);
         let Some((mut v, t)) = fit_for(bounds, light) else {
             warn!(
                 "caustics volume: light {entity} lies inside the casters' bounds, so no volume \
@@ -104,7 +115,7 @@ pub(crate) fn fit_volumes(
             Name::new("caustics volume (fitted)"),
         ));
     }
-    fitted.0 = true;
+    fitted.done = true;
 }
 
 /// Fit the fitted volumes again where the casters' bounds changed (their box and pose only).
