@@ -5,14 +5,14 @@
 //! (and most without a light): each renders on the headless renderer's stage
 //! (`RenderJob::stage`).
 //!
-//! Two are committed, in reduced copies with their licences ([`COMMITTED_SAMPLES`] in
-//! `assets/samples/`, whose README says how they were reduced): they run everywhere, CI
-//! included. Five more ([`SAMPLE_ASSETS`]) are public data we do not commit: they live in the
+//! Six are committed with their licences, two of them in reduced copies ([`COMMITTED_SAMPLES`]
+//! in `assets/samples/`, whose README gives their sources and how two were reduced): they run
+//! everywhere, CI included. Two more ([`SAMPLE_ASSETS`]) are public data we do not commit: they live in the
 //! steering repository's `shared/khronos/<Model>/<Model>.glb` (with each model's licence), found
 //! as `shared/` in the checkout, `../shared/` beside it, or the folder named by
 //! `BEVY_CAUSTICS_SAMPLE_ASSETS` (`.glb`, or `.gltf` with its files beside it;
 //! `BEVY_CAUSTICS_SAMPLE_LIST=A,B,...` names other models there). Where none of those holds them
-//! the test says so on stdout and checks the committed two only (it cannot fetch them: the tests
+//! the test says so on stdout and checks the committed six only (it cannot fetch them: the tests
 //! run offline); with `BEVY_CAUSTICS_SAMPLE_ASSETS` set it fails instead. The README lists them
 //! all with their authors and licences.
 //!
@@ -25,22 +25,24 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use bevy_caustics::headless::{RenderJob, run};
+use bevy_caustics::headless::{RenderJob, RenderReport, run_all};
 use bevy_caustics::{CausticsTechnique, CausticsVolume};
 
 use super::{GPU, require_gpu};
 
-/// The committed models: folder and file stem under `assets/samples/`.
-pub const COMMITTED_SAMPLES: [&str; 2] = ["IridescentDishWithOlives", "LightsPunctualLamp"];
-
-/// The models of the steering repository: folder and file stem under its assets folder.
-pub const SAMPLE_ASSETS: [&str; 5] = [
+/// The committed models: folder and file stem under `assets/samples/`. The first has no light
+/// of its own (the glTF viewer's test opens it).
+pub const COMMITTED_SAMPLES: [&str; 6] = [
+    "IridescentDishWithOlives",
+    "LightsPunctualLamp",
     "AttenuationTest",
     "TransmissionRoughnessTest",
     "SunglassesKhronos",
-    "DispersionTest",
-    "GlassTable",
+    "TransmissionTest",
 ];
+
+/// The models of the steering repository: folder and file stem under its assets folder.
+pub const SAMPLE_ASSETS: [&str; 2] = ["DispersionTest", "GlassTable"];
 
 /// A pixel is lit above this irradiance, lux: 1 % of the stage's 10 000 lux sun. An unlit
 /// caustics buffer is exactly zero; the weakest model here (the glass table, whose glass is a
@@ -140,16 +142,26 @@ fn sample_assets_render_with_every_technique() {
     }
     let t_all = Instant::now();
     let mut failures = Vec::new();
+    let techniques = [
+        CausticsTechnique::Aaps,
+        CausticsTechnique::PhotonMap,
+        CausticsTechnique::ImageSpace,
+        CausticsTechnique::Volume,
+        CausticsTechnique::Reference,
+    ];
     for (name, path) in &models {
-        for technique in [
-            CausticsTechnique::Aaps,
-            CausticsTechnique::PhotonMap,
-            CausticsTechnique::ImageSpace,
-            CausticsTechnique::Volume,
-            CausticsTechnique::Reference,
-        ] {
-            check_model(name, path, technique, &mut failures);
+        // One app per model renders its five jobs in turn (`run_all`).
+        let t0 = Instant::now();
+        let jobs = techniques.map(|t| job(path.clone(), t)).to_vec();
+        let mut reports = run_all(jobs).into_iter();
+        for technique in techniques {
+            match reports.next() {
+                Some(Ok(report)) => check_report(name, technique, &report, &mut failures),
+                Some(Err(e)) => failures.push(format!("{name} {technique:?}: {e}")),
+                None => failures.push(format!("{name} {technique:?}: not rendered")),
+            }
         }
+        println!("{name}: {:.1} s", t0.elapsed().as_secs_f64());
     }
     println!(
         "sample assets: {} models, {:.1} s in all",
@@ -159,17 +171,14 @@ fn sample_assets_render_with_every_technique() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// One model with one technique: it loads, its caustics are finite and lit, and the
+/// One model's render with one technique: its caustics are finite and lit, and the
 /// reference's counters balance. What fails is pushed onto `failures`.
-fn check_model(name: &str, path: &Path, technique: CausticsTechnique, failures: &mut Vec<String>) {
-    let t0 = Instant::now();
-    let report = match run(job(path.to_path_buf(), technique)) {
-        Ok(r) => r,
-        Err(e) => {
-            failures.push(format!("{name} {technique:?}: {e}"));
-            return;
-        }
-    };
+fn check_report(
+    name: &str,
+    technique: CausticsTechnique,
+    report: &RenderReport,
+    failures: &mut Vec<String>,
+) {
     let Some(img) = report.caustics.as_ref() else {
         failures.push(format!("{name} {technique:?}: no caustics image"));
         return;
@@ -178,9 +187,8 @@ fn check_model(name: &str, path: &Path, technique: CausticsTechnique, failures: 
     let max = img.data.iter().map(lum).fold(0.0f32, f32::max);
     let lit = img.data.iter().filter(|p| lum(p) > LIT_LUX).count();
     println!(
-        "{name:<26} {:<10} {:5.1} s  max {max:10.1} lx  lit px {lit:4}  photons {}  warnings {:?} {:?}",
+        "{name:<26} {:<10} max {max:10.1} lx  lit px {lit:4}  photons {}  warnings {:?} {:?}",
         technique.name(),
-        t0.elapsed().as_secs_f64(),
         report.photons_traced,
         report.warnings,
         report.loss_warnings,
