@@ -12,12 +12,13 @@
 //! as `shared/` in the checkout, `../shared/` beside it, or the folder named by
 //! `BEVY_CAUSTICS_SAMPLE_ASSETS` (`.glb`, or `.gltf` with its files beside it;
 //! `BEVY_CAUSTICS_SAMPLE_LIST=A,B,...` names other models there). Where none of those holds them
-//! the test says so on stdout and checks the committed six only (it cannot fetch them: the tests
-//! run offline); with `BEVY_CAUSTICS_SAMPLE_ASSETS` set it fails instead. The README lists them
+//! `steering_sample_assets_render_with_every_technique` says so on stdout and checks
+//! nothing (it cannot fetch them: the tests run offline); with `BEVY_CAUSTICS_SAMPLE_ASSETS` set it fails instead. The README lists them
 //! all with their authors and licences.
 //!
-//! Per model and technique, at 48 x 36 with few photons and frames (about ten seconds a model
-//! and technique on lavapipe): the caustics image is finite and lit, some pixel above
+//! One test per committed model; per model and technique, at 48 x 36 with few photons and
+//! frames (a model's five techniques in one app: 12 to 31 s on lavapipe, the lamp's six lights
+//! the longest): the caustics image is finite and lit, some pixel above
 //! [`LIT_LUX`]. The CPU reference's counters balance: the flux that struck a caster is the
 //! flux deposited on receivers, escaped, absorbed (media, metals, tints), left at the bounce
 //! cap and taken by Russian roulette, to [`BALANCE_TOLERANCE`].
@@ -119,55 +120,79 @@ fn job(scene: PathBuf, technique: CausticsTechnique) -> RenderJob {
     }
 }
 
-/// Every technique on every sample model: finite, lit; the reference's energy balance.
+/// The techniques each model renders with.
+const TECHNIQUES: [CausticsTechnique; 5] = [
+    CausticsTechnique::Aaps,
+    CausticsTechnique::PhotonMap,
+    CausticsTechnique::ImageSpace,
+    CausticsTechnique::Volume,
+    CausticsTechnique::Reference,
+];
+
+/// One model with every technique, its five jobs in one app (`run_all`): what fails, named.
+fn render_model(name: &str, path: &Path) -> Vec<String> {
+    let t0 = Instant::now();
+    let mut failures = Vec::new();
+    let jobs = TECHNIQUES.map(|t| job(path.to_path_buf(), t)).to_vec();
+    let mut reports = run_all(jobs).into_iter();
+    for technique in TECHNIQUES {
+        match reports.next() {
+            Some(Ok(report)) => check_report(name, technique, &report, &mut failures),
+            Some(Err(e)) => failures.push(format!("{name} {technique:?}: {e}")),
+            None => failures.push(format!("{name} {technique:?}: not rendered")),
+        }
+    }
+    println!("{name}: {:.1} s", t0.elapsed().as_secs_f64());
+    failures
+}
+
+/// A test per committed model: it loads, every technique is finite and lit, the reference's
+/// energy balance holds.
+macro_rules! committed_sample {
+    ($($test:ident: $index:literal,)*) => {$(
+        #[test]
+        fn $test() {
+            let _g = GPU.slot();
+            if !require_gpu() {
+                return;
+            }
+            let name = COMMITTED_SAMPLES[$index];
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/samples");
+            let failures = render_model(name, &model_path(&dir, name));
+            assert!(failures.is_empty(), "{failures:#?}");
+        }
+    )*};
+}
+
+committed_sample! {
+    iridescent_dish_with_olives_renders_with_every_technique: 0,
+    lights_punctual_lamp_renders_with_every_technique: 1,
+    attenuation_test_renders_with_every_technique: 2,
+    transmission_roughness_test_renders_with_every_technique: 3,
+    sunglasses_khronos_renders_with_every_technique: 4,
+    transmission_test_renders_with_every_technique: 5,
+}
+
+/// The steering repository's models (or `BEVY_CAUSTICS_SAMPLE_LIST`'s) where they are, with
+/// every technique as the committed ones.
 #[test]
-fn sample_assets_render_with_every_technique() {
+fn steering_sample_assets_render_with_every_technique() {
     let _g = GPU.slot();
     if !require_gpu() {
         return;
     }
-    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/samples");
-    let mut models: Vec<(String, PathBuf)> = COMMITTED_SAMPLES
-        .iter()
-        .map(|name| (name.to_string(), model_path(&committed, name)))
-        .collect();
-    match sample_assets_dir() {
-        Ok(dir) => models.extend(
-            sample_list()
-                .into_iter()
-                .map(|name| (name.clone(), model_path(&dir, &name))),
-        ),
+    let dir = match sample_assets_dir() {
+        Ok(dir) => dir,
         Err(e) if std::env::var_os("BEVY_CAUSTICS_SAMPLE_ASSETS").is_some() => panic!("{e}"),
-        Err(e) => println!("steering repository's sample assets NOT RUN: {e}"),
-    }
-    let t_all = Instant::now();
-    let mut failures = Vec::new();
-    let techniques = [
-        CausticsTechnique::Aaps,
-        CausticsTechnique::PhotonMap,
-        CausticsTechnique::ImageSpace,
-        CausticsTechnique::Volume,
-        CausticsTechnique::Reference,
-    ];
-    for (name, path) in &models {
-        // One app per model renders its five jobs in turn (`run_all`).
-        let t0 = Instant::now();
-        let jobs = techniques.map(|t| job(path.clone(), t)).to_vec();
-        let mut reports = run_all(jobs).into_iter();
-        for technique in techniques {
-            match reports.next() {
-                Some(Ok(report)) => check_report(name, technique, &report, &mut failures),
-                Some(Err(e)) => failures.push(format!("{name} {technique:?}: {e}")),
-                None => failures.push(format!("{name} {technique:?}: not rendered")),
-            }
+        Err(e) => {
+            println!("steering repository's sample assets NOT RUN: {e}");
+            return;
         }
-        println!("{name}: {:.1} s", t0.elapsed().as_secs_f64());
-    }
-    println!(
-        "sample assets: {} models, {:.1} s in all",
-        models.len(),
-        t_all.elapsed().as_secs_f64()
-    );
+    };
+    let failures: Vec<String> = sample_list()
+        .iter()
+        .flat_map(|name| render_model(name, &model_path(&dir, name)))
+        .collect();
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
