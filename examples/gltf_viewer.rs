@@ -1,6 +1,8 @@
 //! Open any glTF with caustics on: every light becomes a caustic light (with shadows), the
 //! glTF's glass (KHR_materials_transmission, KHR_materials_volume) and mirrors cast caustics as
-//! they are. The glTF's first camera is used if it has one, else one looking at the scene.
+//! they are. The glTF's first camera is used if it has one, else one looking at the scene. A
+//! model that brings no light (most sample models) stands on the headless renderer's stage: a
+//! 10 000 lux sun and a floor below it.
 //!
 //! `cargo run --release --example gltf_viewer -- PATH.gltf` (default: the glass sphere test
 //! scene; without a display it writes gltf_viewer.png). A file that is missing or that the
@@ -27,7 +29,7 @@ use common::{Controls, DefaultPlugins, OrbitCamera};
 
 /// Open a glTF with caustics on: every light becomes a caustic light (with shadows), the
 /// glTF's glass and mirrors cast caustics as they are; its first camera is used if it has
-/// one, else one looking at the scene.
+/// one, else one looking at the scene. A model without lights gets a sun and a floor.
 ///
 /// Without a display (no DISPLAY or WAYLAND_DISPLAY) it renders offscreen and writes
 /// gltf_viewer.png: CAUSTICS_EXAMPLE_SIZE=WxH (pixels, default 640x360),
