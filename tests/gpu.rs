@@ -10,8 +10,6 @@ use support::{GPU, require_gpu};
 
 #[path = "gpu/aaps.rs"]
 mod aaps;
-#[path = "gpu/assets.rs"]
-mod assets;
 #[path = "gpu/energy.rs"]
 mod energy;
 #[path = "gpu/examples.rs"]

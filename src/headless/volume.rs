@@ -79,7 +79,8 @@ pub(crate) fn fit_volumes(
         fitted.done = true;
         return;
     }
-    let Some(scene) = scene else {
+    // Lights and casters change with the scene only.
+    let Some(scene) = scene.filter(|s| !fitted.done || s.is_changed()) else {
         return;
     };
     if scene.lights.is_empty() {
@@ -90,7 +91,7 @@ pub(crate) fn fit_volumes(
         fitted.done = true;
         return;
     };
-    if fitted.done && scene.is_changed() {
+    if fitted.done {
         refit(&scene, &mut followers);
     }
     for (entity, light) in &scene.lights {
