@@ -19,7 +19,7 @@ use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use bevy_caustics::CausticsInspectorPlugin;
 use bevy_caustics::headless::{
-    LoaderPanicCapture, StageLayout, StagePart, build_stage, load_failure_reason,
+    LoaderPanicCapture, STAGE_SUN_LUX, StageLayout, StagePart, build_stage, load_failure_reason,
     report_load_failures_of,
 };
 use bevy_caustics::mark_every_light;
@@ -174,7 +174,7 @@ fn stage_unlit_model(
     .is_ok()
     {
         println!(
-            "{} has no lights: it stands on a stage (a 10 000 lux sun and a floor)",
+            "{} has no lights: it stands on a stage (a {STAGE_SUN_LUX} lux sun and a floor)",
             path.given.display()
         );
     }
